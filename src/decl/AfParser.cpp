@@ -201,9 +201,10 @@ class AfParser {
     AfBody parseBody(const Token& keyword) {
         AfBody b;
         b.location = m_lex.locationOf(keyword);
+        const Token nameToken = m_lex.peek();
         b.name = m_lex.expectString("a body name");
         if (text::equalsIgnoreCase(b.name, "origin") || text::equalsIgnoreCase(b.name, "world"))
-            m_lex.fail(keyword, "a body may not be named '" + b.name + "' (origin and world are reserved)");
+            m_lex.fail(nameToken, "a body may not be named '" + b.name + "' (origin and world are reserved)");
         m_lex.expectPunct('{', "after the body name");
         bool hasJoint = false;
         while (true) {
@@ -215,7 +216,8 @@ class AfParser {
             } else if (t.isNameI("mod")) {
                 const Token m = m_lex.expectToken("a joint mod");
                 b.mod = std::string(m.text);
-                if (!m.isNameI("orientation") && !m.isNameI("position") && !m.isNameI("both"))
+                const auto is = [&](std::string_view v) { return text::equalsIgnoreCase(m.text, v); };
+                if (m.kind == TokenKind::Punct || !(is("orientation") || is("position") || is("both")))
                     m_lex.warn(m, "unknown mod " + m.describe() +
                                       " in body '" + b.name + "': the engine treats it as orientation");
             } else if (t.isNameI("model")) b.model = parseShape();
@@ -383,6 +385,7 @@ class AfParser {
 std::optional<AfFile> parseAf(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics) {
     text::Diagnostics local;
     Lexer lex(text, fileName, local);
+    lex.setBackslashStringConcatenation(true);
     AfFile file;
     try {
         AfParser parser(lex);

@@ -1,5 +1,6 @@
 // Canonical `.af` text: the inverse of parseAf for every value it can produce.
 #include <charconv>
+#include <cmath>
 
 #include "afb/decl/AfParser.h"
 
@@ -11,7 +12,12 @@ namespace {
 std::string num(double v) {
     if (v == 0) v = 0; // -0 and 0 read back equal; write "0"
     char buf[64];
-    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    const std::string_view text(buf, static_cast<std::size_t>(end - buf));
+    // A large integral value prints without '.' or exponent; the lexer would read it as an integer, which must
+    // fit 64 bits. The exponent form reads back as the same double.
+    if (text.find_first_of(".e") == std::string_view::npos && std::abs(v) >= 1e15)
+        end = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::scientific).ptr;
     return std::string(buf, end);
 }
 

@@ -126,6 +126,20 @@ Token Lexer::lex() {
     return t;
 }
 
+Token Lexer::lexQuotedPart(Token t) {
+    advance();
+    const std::size_t start = m_pos;
+    while (cur() != '"') {
+        if (m_pos >= m_src.size()) failAt(t.line, t.column, "unterminated string");
+        if (cur() == '\n') failAt(m_line, m_column, "newline inside a quoted string");
+        if (cur() == '\0') failAt(m_line, m_column, "NUL byte in a text file (binary data?)");
+        advance();
+    }
+    t.text = m_src.substr(start, m_pos - start);
+    advance();
+    return t;
+}
+
 Token Lexer::lexQuoted(Token t, char quote) {
     advance();
     const std::size_t start = m_pos;
@@ -141,7 +155,39 @@ Token Lexer::lexQuoted(Token t, char quote) {
     t.kind = quote == '"' ? TokenKind::String : TokenKind::Literal;
     t.text = m_src.substr(start, m_pos - start);
     advance();
+    if (quote == '"' && m_backslashConcat) concatenateContinuations(t);
     return t;
+}
+
+// LEXFL_ALLOWBACKSLASHSTRINGCONCAT (part of the engine's decl lexer flags): "a" \ "b" — a string, a backslash
+// and another string, separated by white space — is one string "ab". Real .def files use it for long texts.
+void Lexer::concatenateContinuations(Token& t) {
+    std::string* joined = nullptr;
+    while (true) {
+        const std::size_t savePos = m_pos;
+        const std::uint32_t saveLine = m_line, saveColumn = m_column;
+        skipWhitespaceAndComments();
+        if (cur() != '\\') {
+            m_pos = savePos;
+            m_line = saveLine;
+            m_column = saveColumn;
+            return;
+        }
+        const std::uint32_t slashLine = m_line, slashColumn = m_column;
+        advance();
+        skipWhitespaceAndComments();
+        if (cur() != '"') failAt(slashLine, slashColumn, "expected a string after '\\' that continues a string");
+        Token next;
+        next.line = m_line;
+        next.column = m_column;
+        next = lexQuotedPart(next);
+        if (!joined) {
+            m_joinedStrings.emplace_back(t.text);
+            joined = &m_joinedStrings.back();
+        }
+        joined->append(next.text);
+        t.text = *joined;
+    }
 }
 
 // idLexer::ReadNumber semantics (af-format §1.1): decimal with '.', exponent and f/l suffix; 0x hex; 0b binary;

@@ -1,6 +1,7 @@
 #pragma once
 // The one idTech4 lexer (af-format §1.1) shared by .af, .def, .md5mesh and .md5anim.
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -13,7 +14,7 @@ namespace afb::text {
 enum class TokenKind : std::uint8_t {
     End,     ///< end of input
     Name,    ///< [A-Za-z_] then [A-Za-z0-9_] plus the path characters / \ : .
-    String,  ///< "double quoted", no escapes; `text` is the contents
+    String,  ///< "double quoted", no escapes; `text` is the contents (see setBackslashStringConcatenation)
     Literal, ///< 'single quoted' (multi-character allowed); not a string for the decl parsers
     Number,  ///< unsigned number; a minus sign is always its own Punct token
     Punct,   ///< one punctuation character
@@ -60,6 +61,10 @@ class Lexer {
     const Token& peek();
     bool atEnd() { return peek().kind == TokenKind::End; }
 
+    /// Decl files (.af, .def) join `"a" \\ "b"` into one string (the engine's LEXFL_ALLOWBACKSLASHSTRINGCONCAT,
+    /// part of its decl lexer flags); md5 files do not. Off by default.
+    void setBackslashStringConcatenation(bool on) { m_backslashConcat = on; }
+
     const std::string& fileName() const { return m_file; }
     SourceLocation locationOf(const Token& t) const { return {m_file, t.line, t.column}; }
     Diagnostics& diagnostics() { return m_diags; }
@@ -95,6 +100,8 @@ class Lexer {
     void skipWhitespaceAndComments();
     Token lexNumber(Token t);
     Token lexQuoted(Token t, char quote);
+    Token lexQuotedPart(Token t);
+    void concatenateContinuations(Token& t);
     [[noreturn]] void failAt(std::uint32_t line, std::uint32_t column, const std::string& message) const;
     char cur() const { return m_pos < m_src.size() ? m_src[m_pos] : '\0'; }
     char at(std::size_t offset) const { return m_pos + offset < m_src.size() ? m_src[m_pos + offset] : '\0'; }
@@ -107,6 +114,8 @@ class Lexer {
     std::uint32_t m_line = 1;
     std::uint32_t m_column = 1;
     std::optional<Token> m_peeked;
+    bool m_backslashConcat = false;
+    std::deque<std::string> m_joinedStrings; ///< storage of strings joined by backslash continuations (stable addresses)
 };
 
 } // namespace afb::text

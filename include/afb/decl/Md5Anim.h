@@ -1,0 +1,87 @@
+#pragma once
+// Value types and parser for `.md5anim` files (af-format §7.4): what the file says, nothing more.
+//
+// In particular the root translation is kept as written. The engine's anim loader subtracts the baseframe
+// root translation from the animated root components and then zeroes the baseframe root translation
+// (af-format §7.4, §8 item 19); that meaning belongs to the layer that builds poses from an anim, not to this
+// value type.
+#include "afb/decl/Af.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/text/Diagnostics.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace afb::decl {
+
+/// Bits of Md5HierarchyEntry::flags: which components of a joint a frame overrides (ANIM_TX … ANIM_QZ).
+/// Set components are read from the frame in this order, starting at the joint's startIndex.
+enum Md5ComponentBit : int {
+    kMd5Tx = 1 << 0,        ///< translation x
+    kMd5Ty = 1 << 1,        ///< translation y
+    kMd5Tz = 1 << 2,        ///< translation z
+    kMd5Qx = 1 << 3,        ///< quaternion x
+    kMd5Qy = 1 << 4,        ///< quaternion y
+    kMd5Qz = 1 << 5,        ///< quaternion z
+    kMd5AllComponents = 63, ///< every component; flags never hold other bits
+};
+
+/// One line of the `hierarchy { }` block.
+struct Md5HierarchyEntry {
+    std::string name;   ///< joint name as written; must equal the mesh's joint name case-sensitively (§7.4)
+    int parent = -1;    ///< parent index, lower than this joint's index; -1 only for joint 0
+    int flags = 0;      ///< Md5ComponentBit set: components animated by the frames (0..63)
+    int startIndex = 0; ///< index in each frame of the joint's first animated component
+    bool operator==(const Md5HierarchyEntry&) const = default;
+};
+
+/// One line of the `bounds { }` block: the model's bounding box in one frame.
+struct Md5Bounds {
+    Vec3 min; ///< minimum corner, model space, Doom units
+    Vec3 max; ///< maximum corner, model space, Doom units
+    bool operator==(const Md5Bounds&) const = default;
+};
+
+/// One line of the `baseframe { }` block: a joint's values for the components its flags do not animate.
+struct Md5BaseJoint {
+    Vec3
+        position; ///< translation relative to the parent joint (root: model-relative), Doom units, as written
+    Vec3 orientation; ///< parent-relative orientation qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|), §7.3)
+    bool operator==(const Md5BaseJoint&) const = default;
+};
+
+/// A whole `.md5anim` file.
+struct Md5Anim {
+    int version = 10;                         ///< `MD5Version`, always 10 once parsed
+    std::string commandline;                  ///< `commandline` string as written (exporter notes)
+    int frameRate = 24;                       ///< frames per second, >= 0 (0: a still pose)
+    int numAnimatedComponents = 0;            ///< floats per frame, 0..6 × joints
+    std::vector<Md5HierarchyEntry> hierarchy; ///< one entry per joint, in joint order
+    std::vector<Md5Bounds> bounds;            ///< one box per frame
+    std::vector<Md5BaseJoint> baseframe;     ///< one entry per joint; root translation NOT zeroed (see above)
+    std::vector<std::vector<double>> frames; ///< `frame k` values, each numAnimatedComponents long, k = index
+    bool operator==(const Md5Anim&) const = default;
+};
+
+/// Number of bits set in Md5HierarchyEntry::flags: how many components the joint reads from each frame.
+int animatedComponentCount(int flags);
+
+/// The first way `anim`'s hierarchy differs from `mesh`'s joints (joint count, names compared
+/// case-sensitively, parent indices), as the engine's CheckModelHierarchy checks them (af-format §7.4);
+/// nullopt when they match.
+std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh);
+
+/// Parses `.md5anim` text. Every count, index and reference is checked (af-format §7.4); on any error:
+/// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
+/// locations only.
+std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName,
+                                    text::Diagnostics& diagnostics);
+
+/// Reads and parses one `.md5anim` file.
+std::optional<Md5Anim> loadMd5Anim(const std::filesystem::path& path, text::Diagnostics& diagnostics);
+
+} // namespace afb::decl

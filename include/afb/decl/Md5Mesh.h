@@ -1,0 +1,89 @@
+#pragma once
+// Value types and parser for `.md5mesh` files (af-format §7.3): what the file says, nothing more. Joint
+// transforms stay in the file's Doom conventions (model-space bind pose, quaternion w left implicit); the
+// figure layer converts them (af-format §0, §8 item 21).
+#include "afb/decl/Af.h"
+#include "afb/text/Diagnostics.h"
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace afb::decl {
+
+/// One line of the `joints { }` block: a joint of the bind pose.
+struct Md5Joint {
+    std::string name; ///< as written; looked up case-insensitively, first match wins (see findJoint)
+    int parent = -1;  ///< index of the parent joint, always lower than this joint's index; -1 for a root
+    Vec3 position;    ///< bind position in model space (absolute, not parent-relative), Doom units
+    Vec3 orientation; ///< bind orientation in model space: qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|),
+                      ///< §7.3)
+    bool operator==(const Md5Joint&) const = default;
+};
+
+/// One `vert` line: texture coordinates and the vertex's range in its mesh's weight list.
+struct Md5Vert {
+    double s = 0, t = 0; ///< texture coordinates as written
+    int firstWeight = 0; ///< index of the vertex's first weight in Md5SubMesh::weights
+    int weightCount =
+        1; ///< number of consecutive weights, at least 1 (firstWeight + weightCount <= weights.size())
+    bool operator==(const Md5Vert&) const = default;
+};
+
+/// One `tri` line: a triangle of the mesh.
+struct Md5Tri {
+    int v[3] = {0, 0, 0}; ///< indices into Md5SubMesh::verts, in the file's winding order
+    bool operator==(const Md5Tri&) const = default;
+};
+
+/// One `weight` line: a joint's contribution to the vertices that use it.
+struct Md5Weight {
+    int joint = 0;   ///< index into Md5Mesh::joints
+    double bias = 0; ///< blend factor as written (the engine does not renormalise biases)
+    Vec3 offset;     ///< position in the joint's bind frame (joint-local), Doom units
+    bool operator==(const Md5Weight&) const = default;
+};
+
+/// One `mesh { }` block: a surface with one material.
+struct Md5SubMesh {
+    std::string name;               ///< the optional `name` string; empty when absent
+    std::string shader;             ///< material name as written
+    std::vector<Md5Vert> verts;     ///< `vert` lines, in index order
+    std::vector<Md5Tri> tris;       ///< `tri` lines, in index order
+    std::vector<Md5Weight> weights; ///< `weight` lines, in index order
+    bool operator==(const Md5SubMesh&) const = default;
+};
+
+/// A whole `.md5mesh` file: the bind-pose skeleton and its skinned surfaces.
+struct Md5Mesh {
+    int version = 10;               ///< `MD5Version`, always 10 once parsed
+    std::string commandline;        ///< `commandline` string as written (exporter notes)
+    std::vector<Md5Joint> joints;   ///< `joints` block, in file order; parents precede children
+    std::vector<Md5SubMesh> meshes; ///< `mesh` blocks, in file order
+    bool operator==(const Md5Mesh&) const = default;
+};
+
+/// Index of the first joint named `name`, compared ignoring ASCII case as the engine's GetJointHandle does
+/// (af-format §7.3, §8 item 22: a duplicate name is shadowed by the earlier joint); nullopt when absent.
+std::optional<int> findJoint(const Md5Mesh& mesh, std::string_view name);
+
+/// Number of vertices over all sub-meshes.
+std::size_t totalVertCount(const Md5Mesh& mesh);
+/// Number of triangles over all sub-meshes.
+std::size_t totalTriCount(const Md5Mesh& mesh);
+/// Number of weights over all sub-meshes.
+std::size_t totalWeightCount(const Md5Mesh& mesh);
+
+/// Parses `.md5mesh` text. Every count, index and reference is checked (af-format §7.3); on any error:
+/// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
+/// locations only.
+std::optional<Md5Mesh> parseMd5Mesh(std::string_view text, const std::string& fileName,
+                                    text::Diagnostics& diagnostics);
+
+/// Reads and parses one `.md5mesh` file.
+std::optional<Md5Mesh> loadMd5Mesh(const std::filesystem::path& path, text::Diagnostics& diagnostics);
+
+} // namespace afb::decl

@@ -1,0 +1,24 @@
+#pragma once
+// Subcommands of the `afb` tool. Each registers its options on the CLI11 app and runs when selected.
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "afb/text/Diagnostics.h"
+
+namespace afb::cli {
+
+/// Registers `afb parse`; the callback sets the process exit code through `exitCode`.
+void addParseCommand(CLI::App& app, int& exitCode);
+/// Registers `afb fmt`.
+void addFmtCommand(CLI::App& app, int& exitCode);
+/// Registers `afb resolve`.
+void addResolveCommand(CLI::App& app, int& exitCode);
+/// Registers `afb inspect`.
+void addInspectCommand(CLI::App& app, int& exitCode);
+
+/// Prints every diagnostic to stderr as `file:line:col: error: message`.
+void printDiagnostics(const text::Diagnostics& diagnostics);
+/// Diagnostics as JSON: {"errors": [...], "warnings": [...]} of formatted messages.
+nlohmann::json diagnosticsJson(const text::Diagnostics& diagnostics);
+
+} // namespace afb::cli

@@ -1,0 +1,292 @@
+#include "afb/decl/Md5Anim.h"
+
+#include "afb/text/Files.h"
+#include "afb/text/Lexer.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <functional>
+#include <limits>
+
+namespace afb::decl {
+namespace {
+
+using text::Lexer;
+using text::Token;
+using text::TokenKind;
+
+constexpr std::int64_t kMd5Version = 10;
+
+// The shortest text each entry can be written in. A count larger than the rest of the input could hold is
+// rejected before anything is allocated, so a file claiming two billion frames costs nothing.
+constexpr std::size_t kMinJointBytes = 21; // `""0 0 0` in hierarchy plus `(0 0 0)(0 0 0)` in baseframe
+constexpr std::size_t kMinFrameBytes = 23; // `(0 0 0)(0 0 0)` in bounds plus `frame 0{}`; values add 2 each
+
+// A count is only known to fit the input; reserve at most this many entries up front, so that memory follows
+// the entries actually read rather than the claim.
+constexpr std::size_t kMaxReserve = 4096;
+std::size_t reserveFor(int count) {
+    return std::min(static_cast<std::size_t>(count), kMaxReserve);
+}
+
+std::string quotedName(std::string_view s) {
+    return "\"" + std::string(s.substr(0, 60)) + "\"";
+}
+
+// af-format §7.4: a fixed sequence of sections, each with exactly the announced number of entries.
+class AnimParser {
+  public:
+    AnimParser(std::string_view source, const std::string& fileName, text::Diagnostics& diagnostics)
+        : m_src(source), m_lex(source, fileName, diagnostics) {}
+
+    Md5Anim parse() {
+        Md5Anim anim;
+        if (m_lex.atEnd()) m_lex.fail(m_lex.peek(), "empty md5anim file: expected 'MD5Version 10'");
+        expectKeyword("MD5Version", "at the start of an md5anim file");
+        const Token versionToken = m_lex.peek();
+        if (m_lex.parseInt("MD5Version") != kMd5Version)
+            m_lex.fail(versionToken,
+                       "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
+        expectKeyword("commandline", "after MD5Version");
+        anim.commandline = m_lex.expectString("the commandline");
+
+        expectKeyword("numFrames", "after commandline");
+        const Token framesToken = m_lex.peek();
+        const int numFrames = parseSizedCount("numFrames", kMinFrameBytes);
+        if (numFrames == 0) m_lex.fail(framesToken, "numFrames 0: an md5anim needs at least one frame");
+
+        expectKeyword("numJoints", "after numFrames");
+        const Token jointsToken = m_lex.peek();
+        const int numJoints = parseSizedCount("numJoints", kMinJointBytes);
+        if (numJoints == 0) m_lex.fail(jointsToken, "numJoints 0: an md5anim needs at least one joint");
+
+        expectKeyword("frameRate", "after numJoints");
+        const Token rateToken = m_lex.peek();
+        const std::int64_t frameRate = m_lex.parseInt("frameRate");
+        if (frameRate < 0) m_lex.fail(rateToken, "frameRate " + std::to_string(frameRate) + " is negative");
+        anim.frameRate = static_cast<int>(frameRate);
+
+        expectKeyword("numAnimatedComponents", "after frameRate");
+        const Token componentsToken = m_lex.peek();
+        const std::uint64_t components =
+            m_lex.parseCount("numAnimatedComponents", std::numeric_limits<std::uint32_t>::max());
+        const std::uint64_t maxComponents = 6 * static_cast<std::uint64_t>(numJoints);
+        if (components > maxComponents)
+            m_lex.fail(componentsToken, "numAnimatedComponents " + std::string(componentsToken.text) +
+                                            " is more than 6 per joint (at most " +
+                                            std::to_string(maxComponents) + " for numJoints " +
+                                            std::to_string(numJoints) + ")");
+        anim.numAnimatedComponents = static_cast<int>(components);
+        // Each value of each frame needs at least a digit and a separator.
+        const std::uint64_t frameBytes = kMinFrameBytes + (components > 0 ? 2 * components - 1 : 0);
+        if (static_cast<std::uint64_t>(numFrames) * frameBytes > bytesAfter(componentsToken))
+            m_lex.fail(framesToken, "numFrames " + std::string(framesToken.text) +
+                                        " with numAnimatedComponents " + std::string(componentsToken.text) +
+                                        " values each is more than the file can hold");
+
+        anim.hierarchy.reserve(reserveFor(numJoints));
+        parseBlock("hierarchy", numJoints, "numJoints", [&](int i) {
+            anim.hierarchy.push_back(parseHierarchyEntry(i, anim.numAnimatedComponents));
+        });
+        anim.bounds.reserve(reserveFor(numFrames));
+        parseBlock("bounds", numFrames, "numFrames", [&](int) {
+            Md5Bounds b;
+            b.min = parseVec3("the bounds minimum");
+            b.max = parseVec3("the bounds maximum");
+            anim.bounds.push_back(b);
+        });
+        anim.baseframe.reserve(reserveFor(numJoints));
+        parseBlock("baseframe", numJoints, "numJoints", [&](int) {
+            Md5BaseJoint j;
+            j.position = parseVec3("the baseframe position");
+            j.orientation = parseVec3("the baseframe orientation");
+            anim.baseframe.push_back(j);
+        });
+
+        anim.frames.reserve(reserveFor(numFrames));
+        for (int k = 0; k < numFrames; ++k)
+            anim.frames.push_back(parseFrame(k, numFrames, anim.numAnimatedComponents));
+        if (!m_lex.atEnd()) {
+            const Token t = m_lex.next();
+            if (t.isName("frame")) m_lex.fail(t, "more frames than numFrames " + std::to_string(numFrames));
+            m_lex.fail(t, "unexpected " + t.describe() + " after the last frame");
+        }
+        return anim;
+    }
+
+  private:
+    void expectKeyword(std::string_view keyword, std::string_view context) {
+        const Token t = m_lex.next();
+        if (!t.isName(keyword))
+            m_lex.fail(t, "expected '" + std::string(keyword) + "' " + std::string(context) + ", found " +
+                              t.describe());
+    }
+
+    // Bytes of input after `t`, a number token (its text lies in the source; joined strings would not).
+    std::size_t bytesAfter(const Token& t) const {
+        const std::less<const char*> before;
+        if (t.kind != TokenKind::Number || before(t.text.data(), m_src.data()) ||
+            before(m_src.data() + m_src.size(), t.text.data()))
+            return m_src.size();
+        const auto start = static_cast<std::size_t>(t.text.data() - m_src.data());
+        return m_src.size() - std::min(m_src.size(), start + t.text.size());
+    }
+
+    // A header count, checked against what the rest of the input could hold before anyone allocates for it.
+    int parseSizedCount(std::string_view what, std::size_t minBytesPerEntry) {
+        const Token t = m_lex.peek();
+        const std::uint64_t n =
+            m_lex.parseCount(what, static_cast<std::uint64_t>(std::numeric_limits<int>::max()));
+        const std::size_t room = bytesAfter(t) / minBytesPerEntry;
+        if (n > room)
+            m_lex.fail(t, std::string(what) + " " + std::string(t.text) +
+                              " is more than the file can hold (the rest of the file has room for at most " +
+                              std::to_string(room) + ")");
+        return static_cast<int>(n);
+    }
+
+    Vec3 parseVec3(std::string_view what) {
+        const std::string context = "around " + std::string(what);
+        Vec3 v;
+        m_lex.expectPunct('(', context);
+        v.x = m_lex.parseFloat(what);
+        v.y = m_lex.parseFloat(what);
+        v.z = m_lex.parseFloat(what);
+        m_lex.expectPunct(')', context);
+        return v;
+    }
+
+    // `name { <count> lines }`, each line read by `parseLine(index)`.
+    template <class ParseLine>
+    void parseBlock(std::string_view name, int count, std::string_view countName, ParseLine&& parseLine) {
+        expectKeyword(name, "(the next md5anim section)");
+        m_lex.expectPunct('{', "after '" + std::string(name) + "'");
+        for (int i = 0; i < count; ++i) {
+            if (m_lex.peek().isPunct('}'))
+                m_lex.fail(m_lex.peek(), "the " + std::string(name) + " block ends after " +
+                                             std::to_string(i) + " lines, but " + std::string(countName) +
+                                             " is " + std::to_string(count));
+            parseLine(i);
+        }
+        const Token close = m_lex.next();
+        if (!close.isPunct('}'))
+            m_lex.fail(close, "expected '}' closing the " + std::string(name) + " block after " +
+                                  std::string(countName) + " " + std::to_string(count) + " lines, found " +
+                                  close.describe() + " (more lines than " + std::string(countName) + "?)");
+    }
+
+    Md5HierarchyEntry parseHierarchyEntry(int index, int numComponents) {
+        Md5HierarchyEntry e;
+        e.name = m_lex.expectString("a joint name");
+        const Token parentToken = m_lex.peek();
+        const std::int64_t parent = m_lex.parseInt("the parent joint index");
+        if (index == 0 && parent != -1)
+            m_lex.fail(parentToken, "joint 0 " + quotedName(e.name) + " has parent " +
+                                        std::to_string(parent) +
+                                        ": the first joint must be the root (parent -1)");
+        if (index > 0 && (parent < 0 || parent >= index))
+            m_lex.fail(parentToken,
+                       "joint " + std::to_string(index) + " " + quotedName(e.name) + " has parent " +
+                           std::to_string(parent) + ": only joint 0 may be a root, and parents must " +
+                           "precede children (a parent index 0.." + std::to_string(index - 1) + ")");
+        e.parent = static_cast<int>(parent);
+
+        const Token flagsToken = m_lex.peek();
+        const std::int64_t flags = m_lex.parseInt("the joint's component flags");
+        if (flags < 0 || flags > kMd5AllComponents)
+            m_lex.fail(flagsToken, "joint " + std::to_string(index) + " " + quotedName(e.name) +
+                                       " has flags " + std::to_string(flags) + ", out of range 0..63");
+        e.flags = static_cast<int>(flags);
+
+        const Token startToken = m_lex.peek();
+        const std::int64_t start = m_lex.parseInt("the joint's first component index");
+        const int used = animatedComponentCount(e.flags);
+        if (start < 0 || start + used > numComponents)
+            m_lex.fail(startToken, "joint " + std::to_string(index) + " " + quotedName(e.name) + " reads " +
+                                       std::to_string(used) + " components from start index " +
+                                       std::to_string(start) + ", past numAnimatedComponents " +
+                                       std::to_string(numComponents));
+        e.startIndex = static_cast<int>(start);
+        return e;
+    }
+
+    // `frame k { C values }`, k running 0, 1, 2, … in order.
+    std::vector<double> parseFrame(int k, int numFrames, int numComponents) {
+        const Token t = m_lex.next();
+        if (t.kind == TokenKind::End)
+            m_lex.fail(t, "the file ends after " + std::to_string(k) + " frames, but numFrames is " +
+                              std::to_string(numFrames));
+        if (!t.isName("frame"))
+            m_lex.fail(t, "expected 'frame " + std::to_string(k) + "', found " + t.describe());
+        const Token indexToken = m_lex.peek();
+        const std::uint64_t index =
+            m_lex.parseCount("frame index", std::numeric_limits<std::uint64_t>::max());
+        if (index != static_cast<std::uint64_t>(k))
+            m_lex.fail(indexToken, "frame index " + std::string(indexToken.text) + " should be " +
+                                       std::to_string(k) + " (frames are numbered 0, 1, 2, ... in order)");
+        m_lex.expectPunct('{', "after 'frame " + std::to_string(k) + "'");
+        std::vector<double> values;
+        values.reserve(reserveFor(numComponents));
+        for (int i = 0; i < numComponents; ++i) {
+            if (m_lex.peek().isPunct('}'))
+                m_lex.fail(m_lex.peek(), "frame " + std::to_string(k) + " has " + std::to_string(i) +
+                                             " values, but numAnimatedComponents is " +
+                                             std::to_string(numComponents));
+            values.push_back(m_lex.parseFloat("a frame value"));
+        }
+        const Token close = m_lex.next();
+        if (close.kind == TokenKind::Number || close.isPunct('-'))
+            m_lex.fail(close, "frame " + std::to_string(k) + " has more values than numAnimatedComponents " +
+                                  std::to_string(numComponents));
+        if (!close.isPunct('}'))
+            m_lex.fail(close,
+                       "expected '}' closing frame " + std::to_string(k) + ", found " + close.describe());
+        return values;
+    }
+
+    std::string_view m_src;
+    Lexer m_lex;
+};
+
+} // namespace
+
+int animatedComponentCount(int flags) {
+    return std::popcount(static_cast<unsigned>(flags & kMd5AllComponents));
+}
+
+std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh) {
+    if (anim.hierarchy.size() != mesh.joints.size())
+        return "the anim has " + std::to_string(anim.hierarchy.size()) + " joints, the mesh has " +
+               std::to_string(mesh.joints.size());
+    for (std::size_t i = 0; i < mesh.joints.size(); ++i) {
+        const Md5HierarchyEntry& a = anim.hierarchy[i];
+        const Md5Joint& m = mesh.joints[i];
+        if (a.name != m.name) // case-sensitive, unlike joint lookups (af-format §8 item 1)
+            return "joint " + std::to_string(i) + " is " + quotedName(a.name) + " in the anim but " +
+                   quotedName(m.name) + " in the mesh (names are compared case-sensitively)";
+        if (a.parent != m.parent)
+            return "joint " + std::to_string(i) + " " + quotedName(a.name) + " has parent " +
+                   std::to_string(a.parent) + " in the anim but " + std::to_string(m.parent) + " in the mesh";
+    }
+    return std::nullopt;
+}
+
+std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName,
+                                    text::Diagnostics& diagnostics) {
+    try {
+        AnimParser parser(text, fileName, diagnostics);
+        return parser.parse();
+    } catch (const text::ParseError& e) {
+        diagnostics.error(e.where, e.what());
+        return std::nullopt;
+    }
+}
+
+std::optional<Md5Anim> loadMd5Anim(const std::filesystem::path& path, text::Diagnostics& diagnostics) {
+    const std::optional<std::string> data = text::readFile(path, diagnostics);
+    if (!data) return std::nullopt;
+    return parseMd5Anim(*data, path.string(), diagnostics);
+}
+
+} // namespace afb::decl

@@ -1,0 +1,33 @@
+# Included from tests/CMakeLists.txt: end-to-end tests of the afb tool on bundled content.
+if(NOT TARGET afb)
+  return()
+endif()
+
+function(afb_cli_test name exit)
+  cmake_parse_arguments(T "" "" "ARGS;MATCH" ${ARGN})
+  add_test(NAME cli.${name}
+    COMMAND ${CMAKE_COMMAND} "-DCMD=$<TARGET_FILE:afb>;${T_ARGS}" "-DEXIT=${exit}" "-DMATCH=${T_MATCH}"
+            -P ${CMAKE_CURRENT_LIST_DIR}/expect.cmake
+    WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+endfunction()
+
+file(GLOB _afb_bundled_af RELATIVE ${PROJECT_SOURCE_DIR} CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/af/*.af)
+file(GLOB _afb_bundled_def RELATIVE ${PROJECT_SOURCE_DIR} CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/def/*.def)
+file(GLOB_RECURSE _afb_bundled_md5 RELATIVE ${PROJECT_SOURCE_DIR} CONFIGURE_DEPENDS
+     ${PROJECT_SOURCE_DIR}/models/*.md5mesh ${PROJECT_SOURCE_DIR}/models/*.md5anim)
+
+afb_cli_test(parse_bundled 0 ARGS parse ${_afb_bundled_af} ${_afb_bundled_def} ${_afb_bundled_md5})
+afb_cli_test(parse_json 0 ARGS parse --json af/chain.af models/md5/props/chain/chain.md5mesh
+             MATCH "\"bodies\":10" "\"constraints\":10" "\"joints\":11" "\"tris\":10")
+afb_cli_test(parse_error_location 1 ARGS parse tests/cli/data/typo_in_body.af
+             MATCH "typo_in_body.af:5:3: error: unknown token 'denisty' in body 'pelvis'")
+afb_cli_test(parse_missing_file 1 ARGS parse no/such/file.af MATCH "no/such/file.af: error: no such file")
+afb_cli_test(parse_unknown_type 1 ARGS parse README.md MATCH "unknown file type")
+foreach(af IN LISTS _afb_bundled_af)
+  get_filename_component(_n ${af} NAME_WE)
+  afb_cli_test(fmt_canonical_${_n} 0 ARGS fmt --check ${af})
+endforeach()
+afb_cli_test(resolve_chain 0 ARGS resolve --base . chain
+             MATCH "models/md5/props/chain/chain.md5mesh" "af_pose.md5anim" "chain.af")
+afb_cli_test(resolve_json 0 ARGS resolve --json --base . chain MATCH "\"figure\": *\"chain\"")
+afb_cli_test(resolve_unknown 1 ARGS resolve --base . no_such_entity MATCH "no_such_entity")

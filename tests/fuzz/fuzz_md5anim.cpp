@@ -1,0 +1,17 @@
+// libFuzzer target: parseMd5Anim on arbitrary bytes. It must either succeed or fail with an error diagnostic;
+// crashes, sanitizer reports, hangs and runaway allocations (e.g. trusting a huge count) are bugs.
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+#include "afb/decl/Md5Anim.h"
+#include "afb/text/Diagnostics.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    const std::string_view src(reinterpret_cast<const char*>(data), size);
+    afb::text::Diagnostics diags;
+    const auto parsed = afb::decl::parseMd5Anim(src, "fuzz.md5anim", diags);
+    if (!parsed && !diags.hasErrors()) std::abort(); // a failed parse must say why
+    return 0;
+}
