@@ -1,0 +1,76 @@
+#pragma once
+// A live ragdoll: a RagdollAsset's bodies and constraints in the caller's btDynamicsWorld.
+#include <memory>
+#include <vector>
+
+#include <btBulletDynamicsCommon.h>
+
+#include "afb/bullet/RagdollAsset.h"
+
+namespace afb::bullet {
+
+/// Where and how a ragdoll enters a world.
+struct SpawnOptions {
+    /// Entity transform: model space (X forward, Y left, Z up, metres) to world.
+    btTransform entityTransform = btTransform::getIdentity();
+    /// Bullet collision group of every body (the caller's choice).
+    int collisionGroup = btBroadphaseProxy::DefaultFilter;
+    /// Bullet collision mask of every body; bodies attached to the world by a collision-disabling constraint
+    /// also drop btBroadphaseProxy::StaticFilter (the engine lets them pass through world geometry, §6.2).
+    int collisionMask = btBroadphaseProxy::AllFilter;
+    /// Solver iterations for the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
+    /// for the world's count. Contacts keep the world's count. 20 holds loaded limits to within 1° at 60 Hz where
+    /// the common 10 leaves 1–2° (measured in tests/bullet/test_constraints.cpp).
+    int constraintIterations = 20;
+};
+
+/// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
+/// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
+class Ragdoll {
+  public:
+    Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options = {});
+    ~Ragdoll();
+    Ragdoll(const Ragdoll&) = delete;
+    Ragdoll& operator=(const Ragdoll&) = delete;
+
+    /// The built figure this ragdoll simulates.
+    const figure::Figure& figure() const { return m_asset->figure(); }
+    /// The shared asset.
+    const std::shared_ptr<const RagdollAsset>& asset() const { return m_asset; }
+    /// The world the ragdoll lives in.
+    btDynamicsWorld& world() const { return m_world; }
+    /// The entity transform it was spawned with (model space to world).
+    const btTransform& spawnTransform() const { return m_spawn; }
+
+    /// Number of rigid bodies (one per figure body, same order).
+    int bodyCount() const { return static_cast<int>(m_bodies.size()); }
+    /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes).
+    btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
+    /// The main Bullet constraint of figure constraint `i`.
+    btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
+    /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths).
+    int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
+
+    /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
+    /// space now; at spawn the two coincide.
+    std::pair<btTransform, btTransform> constraintFramesWorld(int i) const;
+
+  private:
+    class Action;
+    void addBodies(const SpawnOptions& options);
+    void addConstraints(int iterations);
+    void filterPairs();
+    btRigidBody& other(int body2) const;
+    btTransform frameOfBody2(const figure::FigureConstraint& c) const;
+
+    std::shared_ptr<const RagdollAsset> m_asset;
+    btDynamicsWorld& m_world;
+    btTransform m_spawn;
+    std::vector<std::unique_ptr<btRigidBody>> m_bodies;
+    std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
+    std::vector<btTypedConstraint*> m_main;                       ///< per figure constraint
+    std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
+    std::unique_ptr<Action> m_action;
+};
+
+} // namespace afb::bullet

@@ -1,0 +1,244 @@
+// Spawning a figure into a Bullet world: af-format §4 (constraint mapping), §4.7 (springs), §4.8 (friction),
+// §6.2 (collision filtering).
+#include "afb/bullet/Ragdoll.h"
+
+#include <algorithm>
+
+#include "afb/bullet/Constraints.h"
+#include "afb/bullet/Convert.h"
+#include "afb/figure/Collision.h"
+
+namespace afb::bullet {
+
+using figure::FigureConstraint;
+using ConstraintType = decl::ConstraintType;
+
+namespace {
+
+// Fixed restitution of AF bodies (af-format §3.4; the engine applies it above 2 units/s only).
+constexpr btScalar kRestitution = btScalar(0.4);
+
+// The rotation taking unit vector `from` to unit vector `to` along the shortest arc.
+btMatrix3x3 shortestArc(btVector3 from, btVector3 to) { return btMatrix3x3(shortestArcQuatNormalize2(from, to)); }
+
+// A rotation whose first column is `x` (unit).
+btMatrix3x3 basisWithX(const btVector3& x) {
+    btVector3 y, z;
+    btPlaneSpace1(x, y, z);
+    btMatrix3x3 m;
+    m.setValue(x.x(), y.x(), z.x(), x.y(), y.y(), z.y(), x.z(), y.z(), z.z());
+    return m;
+}
+
+} // namespace
+
+// Per-step work of a ragdoll: the joint friction bounds follow each joint's reaction force of the step just
+// solved (af-format §4.8).
+class Ragdoll::Action : public btActionInterface {
+  public:
+    struct Friction {
+        JointFrictionConstraint* constraint;
+        const btJointFeedback* feedback;
+        btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
+    };
+    std::vector<Friction> frictions;
+
+    void updateAction(btCollisionWorld*, btScalar dt) override {
+        for (const Friction& f : frictions)
+            f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
+    }
+    void debugDraw(btIDebugDraw*) override {}
+};
+
+Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
+    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>()) {
+    addBodies(options);
+    addConstraints(options.constraintIterations);
+    filterPairs();
+    m_world.addAction(m_action.get());
+}
+
+Ragdoll::~Ragdoll() {
+    m_world.removeAction(m_action.get());
+    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+}
+
+void Ragdoll::addBodies(const SpawnOptions& options) {
+    const figure::Figure& f = figure();
+    for (std::size_t i = 0; i < f.bodies.size(); ++i) {
+        const figure::FigureBody& b = f.bodies[i];
+        btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(b.massKg), nullptr,
+                                                      m_asset->shape(static_cast<int>(i)), toBt(b.inertiaKgM2));
+        info.m_startWorldTransform = m_spawn * toBt(b.loadPose);
+        info.m_friction = static_cast<btScalar>(b.contactFriction);
+        info.m_restitution = kRestitution;
+        info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
+        info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
+        auto body = std::make_unique<btRigidBody>(info);
+        int mask = options.collisionMask;
+        if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
+        if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
+        m_world.addRigidBody(body.get(), options.collisionGroup, mask);
+        m_bodies.push_back(std::move(body));
+    }
+}
+
+btRigidBody& Ragdoll::other(int body2) const {
+    return body2 >= 0 ? *m_bodies[static_cast<std::size_t>(body2)] : btTypedConstraint::getFixedBody();
+}
+
+// Body2's frame: body-local, or world for a world constraint (model space moved by the spawn transform).
+btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
+    return c.body2 >= 0 ? toBt(c.frameInBody2) : m_spawn * toBt(c.frameInBody2);
+}
+
+std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
+    const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
+    const btTransform a = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * toBt(c.frameInBody1);
+    const btTransform b = c.body2 >= 0
+                              ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * toBt(c.frameInBody2)
+                              : frameOfBody2(c);
+    return {a, b};
+}
+
+void Ragdoll::addConstraints(int iterations) {
+    const figure::Figure& f = figure();
+    const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
+    for (const FigureConstraint& c : f.constraints) {
+        btRigidBody& a = *m_bodies[static_cast<std::size_t>(c.body1)];
+        btRigidBody& b = other(c.body2);
+        const btTransform fa = toBt(c.frameInBody1);
+        const btTransform fb = frameOfBody2(c);
+        // Directions fixed in body2 as Bullet sees body2's frame (world for the world).
+        const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
+        std::unique_ptr<btTypedConstraint> main;
+        std::unique_ptr<btTypedConstraint> limit;
+        btMatrix3x3 frictionAxes = fb.getBasis();
+        int frictionRows = 0;
+
+        switch (c.type) {
+        case ConstraintType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
+        case ConstraintType::BallAndSocket:
+            frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
+            frictionRows = 3;
+            if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
+                // btConeTwistConstraint: twist about X is free (span < 0), swing keeps the X axes within the
+                // half-angle: frame B's X is the cone axis (body2), frame A's X the shaft (body1), and frame A
+                // is frame B turned along the shortest arc, so the twist starts at 0.
+                const btVector3 axisB = b2Rot * toBt(cone->axisInBody2);
+                const btVector3 shaftA = toBt(cone->shaftInBody1);
+                const btMatrix3x3 frameBRot = basisWithX(axisB);
+                const btTransform bWorld = b.getCenterOfMassTransform();
+                const btTransform aWorld = a.getCenterOfMassTransform();
+                const btVector3 axisW = bWorld.getBasis() * axisB, shaftW = aWorld.getBasis() * shaftA;
+                const btMatrix3x3 frameAWorld = shortestArc(axisW, shaftW) * (bWorld.getBasis() * frameBRot);
+                const btTransform frameA(aWorld.getBasis().transpose() * frameAWorld, fa.getOrigin());
+                const btTransform frameB(frameBRot, fb.getOrigin());
+                auto ct = std::make_unique<btConeTwistConstraint>(a, b, frameA, frameB);
+                const btScalar h = static_cast<btScalar>(cone->halfAngleRad);
+                ct->setLimit(h, h, btScalar(-1), btScalar(1), DirectionLimitConstraint::kErrorReduction, btScalar(1));
+                main = std::move(ct);
+            } else {
+                main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+            }
+            break;
+        case ConstraintType::Universal: {
+            // No relative spin about the shafts (homokinetic, §4.4): cone-twist with twist locked, swing free;
+            // frames' X axes are shaft 1 (body1) and −shaft 2 (body2), aligned at the load pose.
+            auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
+            ct->setLimit(SIMD_PI, SIMD_PI, 0);
+            main = std::move(ct);
+            frictionRows = 2;
+            frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2], 0,
+                                  fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
+            break;
+        }
+        case ConstraintType::Hinge: {
+            auto h = std::make_unique<btHingeConstraint>(a, b, fa, fb, false);
+            if (const auto* range = std::get_if<figure::HingeRange>(&c.limit))
+                h->setLimit(static_cast<btScalar>(range->lowerRad), static_cast<btScalar>(range->upperRad), 1,
+                            DirectionLimitConstraint::kErrorReduction, 1);
+            main = std::move(h);
+            frictionRows = 1;
+            frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
+            break;
+        }
+        case ConstraintType::Slider: {
+            auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
+            s->setLowerLinLimit(1); // lower > upper: free along the axis
+            s->setUpperLinLimit(-1);
+            s->setLowerAngLimit(0); // no rotation
+            s->setUpperAngLimit(0);
+            main = std::move(s);
+            break;
+        }
+        case ConstraintType::Spring: {
+            SpringConstraint::Params p;
+            p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
+            p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
+            p.damping = static_cast<btScalar>(c.spring.dampingNs);
+            p.restLength = static_cast<btScalar>(c.spring.restLengthM);
+            p.minLength = static_cast<btScalar>(c.spring.minLengthM);
+            p.maxLength = static_cast<btScalar>(c.spring.maxLengthM);
+            main = std::make_unique<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
+            break;
+        }
+        }
+
+        // Pyramid limits (ball) and every universal limit: our direction-limit rows.
+        if (c.type == ConstraintType::Universal || c.type == ConstraintType::BallAndSocket) {
+            if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
+                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1), b2Rot * toBt(p->basisInBody2),
+                                                                   DirectionLimitConstraint::Shape::Pyramid,
+                                                                   static_cast<btScalar>(p->halfAngle1Rad),
+                                                                   static_cast<btScalar>(p->halfAngle2Rad));
+            const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
+            if (cone && c.type == ConstraintType::Universal)
+                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
+                                                                   basisWithX(b2Rot * toBt(cone->axisInBody2)),
+                                                                   DirectionLimitConstraint::Shape::Cone,
+                                                                   static_cast<btScalar>(cone->halfAngleRad), 0);
+        }
+
+        m_main.push_back(main.get());
+        if (iterations > 0) {
+            if (main) main->setOverrideNumSolverIterations(iterations);
+            if (limit) limit->setOverrideNumSolverIterations(iterations);
+        }
+        if (main) {
+            m_world.addConstraint(main.get(), c.disablesCollision);
+            if (c.friction > 0 && frictionRows > 0) {
+                auto fb2 = std::make_unique<btJointFeedback>();
+                main->setJointFeedback(fb2.get());
+                auto fr = std::make_unique<JointFrictionConstraint>(a, b, frictionAxes, frictionRows);
+                m_action->frictions.push_back({fr.get(), fb2.get(), static_cast<btScalar>(c.friction) * lever});
+                m_feedback.push_back(std::move(fb2));
+                m_constraints.push_back(std::move(main));
+                m_world.addConstraint(fr.get(), false);
+                m_constraints.push_back(std::move(fr));
+            } else {
+                m_constraints.push_back(std::move(main));
+            }
+        }
+        if (limit) {
+            m_world.addConstraint(limit.get(), false);
+            m_constraints.push_back(std::move(limit));
+        }
+    }
+}
+
+// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables.
+void Ragdoll::filterPairs() {
+    const figure::Figure& f = figure();
+    const std::vector<std::pair<int, int>> colliding = figure::selfCollisionPairs(f);
+    const int n = bodyCount();
+    for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j) {
+            if (std::binary_search(colliding.begin(), colliding.end(), std::make_pair(i, j))) continue;
+            m_bodies[static_cast<std::size_t>(i)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(j)].get(), true);
+            m_bodies[static_cast<std::size_t>(j)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(i)].get(), true);
+        }
+}
+
+} // namespace afb::bullet
