@@ -33,7 +33,7 @@ btMatrix3x3 basisWithX(const btVector3& x) {
 } // namespace
 
 // Per-step work of a ragdoll: the joint friction bounds follow each joint's reaction force of the step just
-// solved (af-format §4.8).
+// solved (af-format §4.8), and the rest rules (§6.1) decide when the figure sleeps.
 class Ragdoll::Action : public btActionInterface {
   public:
     struct Friction {
@@ -41,22 +41,144 @@ class Ragdoll::Action : public btActionInterface {
         const btJointFeedback* feedback;
         btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
     };
+    explicit Action(Ragdoll& owner) : m_owner(owner) {}
     std::vector<Friction> frictions;
+    bool atRest = false;
+    double activeTime = 0;
 
     void updateAction(btCollisionWorld*, btScalar dt) override {
         for (const Friction& f : frictions)
             f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
+        if (atRest) {
+            // Bullet wakes sleeping bodies touched by active ones: then the figure wakes as a whole.
+            for (const auto& b : m_owner.m_bodies)
+                if (b->isActive()) {
+                    wake();
+                    break;
+                }
+            return;
+        }
+        activeTime += dt;
+        if (testRest(dt)) m_owner.putToRest();
     }
     void debugDraw(btIDebugDraw*) override {}
+
+    void wake() {
+        atRest = false;
+        activeTime = 0;
+        m_windowStart = -1;
+        m_havePrevious = false;
+        for (const auto& b : m_owner.m_bodies) b->activate(true);
+    }
+
+  private:
+    // af-format §6.1 TestIfAtRest.
+    bool testRest(double dt) {
+        const figure::RestRules& r = m_owner.figure().rest;
+        const auto& bodies = m_owner.m_bodies;
+        bool speedsLow = m_havePrevious;
+        if (m_previous.size() != bodies.size()) m_previous.resize(bodies.size());
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            const btVector3 v = bodies[i]->getLinearVelocity(), w = bodies[i]->getAngularVelocity();
+            if (m_havePrevious) {
+                const double accel = (v - m_previous[i].first).length() / dt;
+                const double angAccel = (w - m_previous[i].second).length() / dt;
+                if (v.length() > r.linearSpeedMps || w.length() > r.angularSpeedRadps || accel > r.linearAccelMps2 ||
+                    angAccel > r.angularAccelRadps2)
+                    speedsLow = false;
+            }
+            m_previous[i] = {v, w};
+        }
+        m_havePrevious = true;
+        if (r.minMoveTimeS > 0 && activeTime < r.minMoveTimeS) return false;
+        if (r.maxMoveTimeS > 0 && activeTime > r.maxMoveTimeS) return true;
+        // The no-move window: compare every body with its pose at the window's start.
+        if (m_windowStart < 0) {
+            startWindow();
+        } else if (activeTime - m_windowStart > r.noMoveTimeS) {
+            bool still = true;
+            for (std::size_t i = 0; i < bodies.size(); ++i) {
+                const btTransform& now = bodies[i]->getCenterOfMassTransform();
+                const btTransform& then = m_window[i];
+                const btQuaternion dq = now.getRotation() * then.getRotation().inverse();
+                if ((now.getOrigin() - then.getOrigin()).length() >= r.noMoveTranslationM ||
+                    dq.getAngleShortestPath() >= r.noMoveRotationRad)
+                    still = false;
+            }
+            startWindow();
+            if (still) return true;
+        }
+        return speedsLow;
+    }
+    void startWindow() {
+        m_windowStart = activeTime;
+        m_window.clear();
+        for (const auto& b : m_owner.m_bodies) m_window.push_back(b->getCenterOfMassTransform());
+    }
+
+    Ragdoll& m_owner;
+    double m_windowStart = -1;
+    std::vector<btTransform> m_window;
+    std::vector<std::pair<btVector3, btVector3>> m_previous;
+    bool m_havePrevious = false;
 };
 
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
-    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>()) {
+    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>(*this)) {
     addBodies(options);
     addConstraints(options.constraintIterations);
     filterPairs();
     m_world.addAction(m_action.get());
+    if (options.startAtRest) putToRest();
 }
+
+std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
+    std::vector<figure::Transform> out;
+    out.reserve(m_bodies.size());
+    for (const auto& b : m_bodies) out.push_back(toEigen(b->getCenterOfMassTransform()));
+    return out;
+}
+
+void Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
+    for (std::size_t i = 0; i < m_bodies.size() && i < states.size(); ++i) {
+        btRigidBody& b = *m_bodies[i];
+        const btTransform t = toBt(states[i].pose);
+        b.setCenterOfMassTransform(t);
+        b.setInterpolationWorldTransform(t);
+        b.setLinearVelocity(toBt(states[i].linearVelocity));
+        b.setAngularVelocity(toBt(states[i].angularVelocity));
+        b.setInterpolationLinearVelocity(toBt(states[i].linearVelocity));
+        b.setInterpolationAngularVelocity(toBt(states[i].angularVelocity));
+        m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
+                                                                                 m_world.getDispatcher());
+    }
+    wake();
+}
+
+bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint) {
+    const std::vector<int>& owners = figure().jointBody;
+    if (joint < 0 || static_cast<std::size_t>(joint) >= owners.size()) return false;
+    const int body = owners[static_cast<std::size_t>(joint)];
+    if (body < 0 || impulse.length() < impulseThresholdNs()) return false;
+    btRigidBody& b = *m_bodies[static_cast<std::size_t>(body)];
+    wake();
+    b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
+    return true;
+}
+
+bool Ragdoll::atRest() const { return m_action->atRest; }
+double Ragdoll::activeSeconds() const { return m_action->activeTime; }
+
+void Ragdoll::putToRest() {
+    for (const auto& b : m_bodies) {
+        b->setLinearVelocity(btVector3(0, 0, 0));
+        b->setAngularVelocity(btVector3(0, 0, 0));
+        b->forceActivationState(ISLAND_SLEEPING);
+    }
+    m_action->atRest = true;
+}
+
+void Ragdoll::wake() { m_action->wake(); }
 
 Ragdoll::~Ragdoll() {
     m_world.removeAction(m_action.get());
@@ -76,6 +198,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
         auto body = std::make_unique<btRigidBody>(info);
+        body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
         int mask = options.collisionMask;
         if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
         if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests

@@ -260,13 +260,17 @@ class Builder {
     }
 
     // §3.4 friction with its range checks and fallbacks.
+    // A rejected body falls back to the physics defaults, which idAF::Load sets from the decl's final settings
+    // (SetDefaultFriction), not from the settings in force when the body was parsed.
     decl::BodyFriction friction(const Work& w) {
         const decl::AfSettingsValues& st = w.settings;
         auto valid = [](const decl::BodyFriction& f, bool contactAtMostOne) {
             return f.linear >= 0 && f.linear <= 1 && f.angular >= 0 && f.angular <= 1 && f.contact >= 0 &&
                    (!contactAtMostOne || f.contact <= 1);
         };
-        const decl::BodyFriction fallback = valid(st.friction, true) ? st.friction : decl::BodyFriction{0.005, 0.005, 0.8};
+        const decl::BodyFriction physicsDefault = m_decl.finalSettings().friction;
+        const decl::BodyFriction fallback =
+            valid(physicsDefault, true) ? physicsDefault : decl::BodyFriction{0.005, 0.005, 0.8};
         const decl::BodyFriction f = w.decl->friction.value_or(st.friction);
         if (valid(f, false)) return f;
         warning(w.decl->location, "body '" + w.decl->name + "': friction " + fmt(f.linear) + ", " + fmt(f.angular) +

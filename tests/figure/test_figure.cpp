@@ -562,6 +562,83 @@ TEST_CASE("figure: per-step friction becomes per-second damping d = 1 − (1 −
     CHECK(c.angularDamping == Approx(1 - std::pow(0.95, 62.5)).epsilon(1e-12));
 }
 
+TEST_CASE("figure: out-of-range body friction falls back to the physics defaults (§3.4)", "[figure]") {
+    SECTION("valid settings: the figure's settings values") {
+        const Built b = build(R"(articulatedFigure t {
+	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) friction 1.5, 0.02, 0.3 }
+	settings { friction 0.1, 0.2, 0.3 }
+}
+)");
+        INFO(b.findings.str());
+        REQUIRE(b.figure);
+        CHECK(b.hasWarning("body \"pelvis\"", "friction"));
+        // idAF::Load calls SetDefaultFriction with the decl's (final) settings values; a rejected body uses them.
+        const FigureBody& p = b.body("pelvis");
+        CHECK(p.linearFrictionPerStep == Approx(0.1));
+        CHECK(p.angularFrictionPerStep == Approx(0.2));
+        CHECK(p.contactFriction == Approx(0.3));
+        CHECK(p.linearDamping == Approx(1 - std::pow(0.9, 62.5)).epsilon(1e-12));
+    }
+    SECTION("settings that fail their own check (contact > 1): 0.005, 0.005, 0.8") {
+        const Built b = build(R"(articulatedFigure t {
+	settings { friction 0.01, 0.01, 1.5 }
+	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) friction 0.5, -0.1, 0.3 }
+	body "chest" { joint "Spine" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 60 ) }
+}
+)");
+        INFO(b.findings.str());
+        REQUIRE(b.figure);
+        const FigureBody& p = b.body("pelvis");
+        CHECK(p.linearFrictionPerStep == Approx(0.005));
+        CHECK(p.angularFrictionPerStep == Approx(0.005));
+        CHECK(p.contactFriction == Approx(0.8));
+        // A body without its own friction takes the settings values through the body check (contact ≥ 0 only).
+        const FigureBody& c = b.body("chest");
+        CHECK(c.linearFrictionPerStep == Approx(0.01));
+        CHECK(c.contactFriction == Approx(1.5));
+    }
+}
+
+TEST_CASE("figure: rest rules in SI (§1.3, §6.1)", "[figure]") {
+    const Built b = buildOk(R"(articulatedFigure t {
+	settings {
+		suspendSpeed 20, 30, 40, 60
+		noMoveTime 2
+		noMoveTranslation 10
+		noMoveRotation 10
+		minMoveTime 0.5
+		maxMoveTime 8
+	}
+	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) }
+}
+)");
+    const figure::RestRules& r = b.figure->rest;
+    CHECK(r.linearSpeedMps == Approx(20 * kS));
+    CHECK(r.angularSpeedRadps == Approx(30)); // already rad/s
+    CHECK(r.linearAccelMps2 == Approx(40 * kS));
+    CHECK(r.angularAccelRadps2 == Approx(60));
+    CHECK(r.noMoveTimeS == Approx(2));
+    CHECK(r.noMoveTranslationM == Approx(10 * kS));
+    CHECK(r.noMoveRotationRad == Approx(10 * kDeg)); // degrees in the decl
+    CHECK(r.minMoveTimeS == Approx(0.5));
+    CHECK(r.maxMoveTimeS == Approx(8));
+}
+
+TEST_CASE("figure: a cone's apex is at the body-local origin; its COM is 3/4 of the height below (§2.2, §3.1)",
+          "[figure]") {
+    const Built b = build(R"(articulatedFigure t {
+	body "pelvis" { joint "origin" model cone( ( -3, -3, 0 ), ( 3, 3, 10 ), 6 ) origin ( 0, 0, 40 ) }
+	body "offcentre" { joint "Spine" model cone( ( 0, -3, 5 ), ( 6, 3, 15 ), 6 ) origin ( 0, 0, 80 ) angles ( 0, 90, 0 ) }
+}
+)");
+    INFO(b.findings.str());
+    REQUIRE(b.figure);
+    CHECK(near(b.body("pelvis").loadPose.position, Vector3d(0, 0, 40 - 7.5) * kS, kTight));
+    // Bounds off-centre in x: the apex stays at (0, 0, 0) and the base hexagon is centred on (3, 0, −10), so the
+    // exact COM is apex + 3/4·(base centre − apex) = (2.25, 0, −7.5); yaw 90 turns it to (0, 2.25, −7.5).
+    CHECK(near(b.body("offcentre").loadPose.position, Vector3d(0, 2.25, 80 - 7.5) * kS, 1e-12));
+}
+
 TEST_CASE("figure: settings are captured in parse order (§1.8, §8 item 3)", "[figure]") {
     const Built b = buildOk(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 40 ) }
@@ -618,6 +695,8 @@ const char* const kAllConstraints = R"(articulatedFigure t {
 	universalJoint "wu" { body1 "head" anchor joint( "Head" ) shafts ( 1, 0, 0 ), ( -1, 0, 0 ) }
 	hinge "wh" { body1 "tail" body2 "world" anchor ( -8, 0, 45 ) axis ( 0, 1, 1 ) }
 	slider "ws" { body1 "chest" axis ( 0, 0, 1 ) }
+	universalJoint "pyr" { body1 "rthigh" body2 "pelvis" anchor joint( "RightUpLeg" ) shafts ( 0, 0, -1 ), ( 0, 0, 1 )
+		pyramidLimit ( 0.4, -0.2, -0.9 ), 75, 30, 61 }
 	fixed "wf" { body1 "lshin" }
 }
 )";
@@ -629,7 +708,7 @@ TEST_CASE("figure: constraint frames coincide at the load pose for every constra
     INFO(b.findings.str());
     REQUIRE(b.figure);
     const Figure& f = *b.figure;
-    REQUIRE(f.constraints.size() == 11);
+    REQUIRE(f.constraints.size() == 12);
     for (const FigureConstraint& c : f.constraints) {
         INFO("constraint " << c.name);
         CHECK(isRotation(c.frameInBody1.rotation));
@@ -707,6 +786,21 @@ TEST_CASE("figure: cone and pyramid limits (§4.3, §4.4)", "[figure]") {
     // A exactly vertical: l starts as +Y, then turns right-handedly about f by roll = 10°.
     const Vector3d l = Eigen::AngleAxisd(10 * kDeg, Vector3d(0, 0, -1)) * Vector3d::UnitY();
     CHECK(near(Vector3d(basisModel.col(1)), l, 1e-12));
+
+    // A general axis: f = A/|A|; l starts as (−sin yaw, cos yaw, 0) with yaw = atan2(A.y, A.x), then turns
+    // right-handedly about f by the roll (61°); the third column is f × l.
+    const FigureConstraint& gen = b.constraint("pyr");
+    const auto* pg = std::get_if<figure::PyramidLimit>(&gen.limit);
+    REQUIRE(pg);
+    const Matrix3d basisGen = f.bodies[static_cast<std::size_t>(gen.body2)].loadPose.rotation * pg->basisInBody2;
+    const Vector3d fa = Vector3d(0.4, -0.2, -0.9).normalized();
+    const double yaw = std::atan2(-0.2, 0.4);
+    const Vector3d lg = Eigen::AngleAxisd(61 * kDeg, fa) * Vector3d(-std::sin(yaw), std::cos(yaw), 0);
+    CHECK(near(Vector3d(basisGen.col(0)), fa, 1e-12));
+    CHECK(near(Vector3d(basisGen.col(1)), lg, 1e-12));
+    CHECK(near(Vector3d(basisGen.col(2)), Vector3d(fa.cross(lg)), 1e-12));
+    CHECK(pg->halfAngle1Rad == Approx(37.5 * kDeg).epsilon(1e-12));
+    CHECK(pg->halfAngle2Rad == Approx(15 * kDeg).epsilon(1e-12));
 }
 
 TEST_CASE("figure: hinge range φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2] (§4.5)", "[figure]") {
@@ -784,6 +878,17 @@ TEST_CASE("figure: body2 typo attaches to the world with a warning; body1 unknow
 )");
         CHECK_FALSE(b.figure);
         CHECK(b.hasError("hinge \"h\"", "chset"));
+    }
+    SECTION("body1 == body2 (case-insensitively) is an error") {
+        const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
+	fixed "same" {
+		body1 "chest"
+		body2 "CHEST"
+	}
+}
+)");
+        CHECK_FALSE(b.figure);
+        CHECK(b.hasError("fixed \"same\""));
     }
     SECTION("a missing body1 means the first body parsed before the constraint") {
         const Built b = buildOk(std::string("articulatedFigure t {") + kSimpleBodies + R"(
@@ -952,6 +1057,22 @@ TEST_CASE("figure findings: joints contained by no body or by two (§5.3)", "[fi
     CHECK(b.body("pelvis").containedJoints == std::vector<int>{0, 1});
 }
 
+TEST_CASE("figure: an omitted containedJoints means \"*origin\"; the later body wins (§5.3, §8 item 4)",
+          "[figure]") {
+    const Built b = build(R"(articulatedFigure t {
+	body "pelvis" { joint "origin" model box( ( -6, -8, -4 ), ( 6, 8, 4 ) ) origin joint( "Hips" ) containedJoints "*Hips" }
+	body "chest" { joint "Spine" model box( ( -5, -7, 0 ), ( 5, 7, 16 ) ) origin joint( "Spine" ) }
+}
+)");
+    INFO(b.findings.str());
+    REQUIRE(b.figure);
+    const int chest = b.bodyIndex("chest");
+    CHECK(b.figure->jointBody == std::vector<int>(humanoid().size(), chest));
+    CHECK(b.body("pelvis").containedJoints.empty());
+    CHECK(b.body("chest").containedJoints == std::vector<int>{0, 1, 2, 3, 4, 5, 6});
+    CHECK(b.hasWarning("body \"chest\"", "Hips"));
+}
+
 TEST_CASE("figure findings: names that differ only in case are errors (§1.8, §8 item 1)", "[figure]") {
     SECTION("bodies") {
         const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
@@ -1023,7 +1144,10 @@ TEST_CASE("figure findings: self-colliding bodies that overlap or touch at the l
     };
     auto flagged = [](const Built& b) {
         const std::uint32_t l1 = b.lineOf("body \"pelvis\""), l2 = b.lineOf("body \"chest\"");
-        return b.has(text::Severity::Warning, l1, "chest") || b.has(text::Severity::Warning, l2, "pelvis");
+        bool found = false;
+        for (const char* what : {"overlap", "touch"})
+            found = found || b.has(text::Severity::Warning, l1, what) || b.has(text::Severity::Warning, l2, what);
+        return found;
     };
     {
         const Built b = build(figureWith("48", ""));

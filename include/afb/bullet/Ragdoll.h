@@ -1,11 +1,13 @@
 #pragma once
 // A live ragdoll: a RagdollAsset's bodies and constraints in the caller's btDynamicsWorld.
 #include <memory>
+#include <span>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/figure/Placement.h"
 
 namespace afb::bullet {
 
@@ -22,6 +24,8 @@ struct SpawnOptions {
     /// for the world's count. Contacts keep the world's count. 20 holds loaded limits to within 1° at 60 Hz where
     /// the common 10 leaves 1–2° (measured in tests/bullet/test_constraints.cpp).
     int constraintIterations = 20;
+    /// Spawn at rest until touched (entityDef `"nodrop" "1"`, or the seed page's `"sleep" "1"`).
+    bool startAtRest = false;
 };
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
@@ -54,6 +58,28 @@ class Ragdoll {
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
     /// space now; at spawn the two coincide.
     std::pair<btTransform, btTransform> constraintFramesWorld(int i) const;
+
+    /// World transforms of every body (body frames: centre of mass, principal axes), metres.
+    std::vector<figure::Transform> bodyTransforms() const;
+    /// Places every body (one state per body) and sets its velocities, e.g. from an animation
+    /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll.
+    void setBodyStates(std::span<const figure::BodyState> states);
+
+    /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints,
+    /// §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine units,
+    /// 500·metresPerUnit N·s) or on a joint no body contains is ignored: returns false.
+    bool applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint);
+    /// The wake threshold of applyImpulse, N·s.
+    double impulseThresholdNs() const { return 500.0 * figure().units.metresPerUnit; }
+
+    /// True while the figure is at rest by its own rules (§6.1); its bodies are then asleep in Bullet.
+    bool atRest() const;
+    /// Seconds simulated since the ragdoll last woke (the engine's activateTime).
+    double activeSeconds() const;
+    /// Puts the figure to rest now: zero velocities, bodies asleep.
+    void putToRest();
+    /// Wakes the figure and restarts its rest timers.
+    void wake();
 
   private:
     class Action;
