@@ -41,7 +41,7 @@ class Ragdoll::Action : public btActionInterface {
         const btJointFeedback* feedback;
         btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
     };
-    explicit Action(Ragdoll& owner) : m_owner(owner) {}
+    Action(Ragdoll& owner, bool comeToRest) : m_owner(owner), m_comeToRest(comeToRest) {}
     std::vector<Friction> frictions;
     bool atRest = false;
     double activeTime = 0;
@@ -59,7 +59,7 @@ class Ragdoll::Action : public btActionInterface {
             return;
         }
         activeTime += dt;
-        if (testRest(dt)) m_owner.putToRest();
+        if (m_comeToRest && testRest(dt)) m_owner.putToRest();
     }
     void debugDraw(btIDebugDraw*) override {}
 
@@ -117,6 +117,7 @@ class Ragdoll::Action : public btActionInterface {
     }
 
     Ragdoll& m_owner;
+    bool m_comeToRest;
     double m_windowStart = -1;
     std::vector<btTransform> m_window;
     std::vector<std::pair<btVector3, btVector3>> m_previous;
@@ -124,7 +125,7 @@ class Ragdoll::Action : public btActionInterface {
 };
 
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
-    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>(*this)) {
+    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>(*this, options.comeToRest)) {
     addBodies(options);
     addConstraints(options.constraintIterations);
     filterPairs();

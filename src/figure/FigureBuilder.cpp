@@ -603,6 +603,13 @@ class Builder {
             l.shaftInBody1 = dirInBody(out.body1, *shaft);
             l.halfAngle1Rad = 0.5 * pyr->angle1Deg * kRadPerDeg;
             l.halfAngle2Rad = 0.5 * pyr->angle2Deg * kRadPerDeg;
+            const Vector3d sb = basis.transpose() * *shaft; // shaft in (f, l, u) at the load pose
+            const double a1 = std::atan2(sb.y(), sb.x()), a2 = std::atan2(sb.z(), sb.x());
+            if (std::abs(a1) > l.halfAngle1Rad + 1e-6 || std::abs(a2) > l.halfAngle2Rad + 1e-6)
+                warning(c.location, what + ": the shaft starts outside the pyramid (" + fmt(a1 / kRadPerDeg) + ", " +
+                                        fmt(a2 / kRadPerDeg) + " deg from its axis; limits " +
+                                        fmt(pyr->angle1Deg / 2) + ", " + fmt(pyr->angle2Deg / 2) +
+                                        " deg): it is pushed in at once");
             return l;
         }
         return std::monostate{};
@@ -626,6 +633,10 @@ class Builder {
         }
         centre = std::remainder(centre, 2 * std::numbers::pi);
         const double half = 0.5 * std::max(0.0, h.widthDeg) * kRadPerDeg;
+        if (std::abs(centre) > half + 1e-9)
+            warning(c.location, what + ": the limit [" + fmt((centre - half) / kRadPerDeg) + ", " +
+                                    fmt((centre + half) / kRadPerDeg) +
+                                    "] deg excludes the load pose (0 deg): the joint is pushed into range at once");
         return HingeRange{centre - half, centre + half};
     }
 

@@ -28,7 +28,8 @@ struct Scene {
 
     Scene(const afb::figure::Figure& figure, const btVector3& g) {
         world.setGravity(g);
-        ragdoll = std::make_unique<Ragdoll>(RagdollAsset::create(figure), world);
+        // Rest rules off: these tests load limits, they do not wait for the figure to sleep.
+        ragdoll = std::make_unique<Ragdoll>(RagdollAsset::create(figure), world, afb::bullet::SpawnOptions{.comeToRest = false});
         for (int i = 0; i < ragdoll->bodyCount(); ++i) ragdoll->body(i).setActivationState(DISABLE_DEACTIVATION);
     }
     ~Scene() { ragdoll.reset(); }

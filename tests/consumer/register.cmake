@@ -13,7 +13,7 @@ set(_afb_consumer_prefix "${PROJECT_BINARY_DIR}/_consumer_install")
 get_property(_afb_multi_config GLOBAL PROPERTY GENERATOR_IS_MULTI_CONFIG)
 
 # Options common to both consumer configurations.
-set(_afb_consumer_opts "-DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER}")
+set(_afb_consumer_opts "-DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER}" "-DAFB_CONTENT_DIR=${PROJECT_SOURCE_DIR}")
 if(NOT _afb_multi_config AND CMAKE_BUILD_TYPE)
   list(APPEND _afb_consumer_opts "-DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE}")
 endif()
@@ -45,7 +45,7 @@ endif()
 add_test(NAME consumer.build_tree
   COMMAND ${_afb_bat} "${_afb_consumer_bin}/build_tree" ${_afb_bat_gen}
           --build-options ${_afb_consumer_opts} "-Dafbullet_DIR=${PROJECT_BINARY_DIR}"
-          --test-command consumer)
+          --test-command ${CMAKE_CTEST_COMMAND} --output-on-failure)
 
 # (b) install into a fresh prefix, then build against it
 set(_afb_install_script "${_afb_consumer_bin}/install.cmake")
@@ -77,7 +77,7 @@ set_tests_properties(consumer.install PROPERTIES FIXTURES_SETUP afb_consumer_ins
 add_test(NAME consumer.installed_prefix
   COMMAND ${_afb_bat} "${_afb_consumer_bin}/installed_prefix" ${_afb_bat_gen}
           --build-options ${_afb_consumer_opts} "-DCMAKE_PREFIX_PATH=${_afb_consumer_prefix}"
-          --test-command consumer)
+          --test-command ${CMAKE_CTEST_COMMAND} --output-on-failure)
 set_tests_properties(consumer.installed_prefix PROPERTIES FIXTURES_REQUIRED afb_consumer_install)
 
 set_tests_properties(consumer.build_tree consumer.installed_prefix PROPERTIES

@@ -26,6 +26,9 @@ struct SpawnOptions {
     int constraintIterations = 20;
     /// Spawn at rest until touched (entityDef `"nodrop" "1"`, or the seed page's `"sleep" "1"`).
     bool startAtRest = false;
+    /// Apply the figure's rest rules (§6.1) and put it to sleep when they say so (the engine's comeToRest).
+    /// Off: the ragdoll never rests by itself (putToRest still works).
+    bool comeToRest = true;
 };
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes

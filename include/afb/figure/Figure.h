@@ -100,8 +100,9 @@ struct SpringParams {
 };
 
 /// One constraint. Frames coincide (position and orientation) at the load pose, so every constraint is exactly
-/// satisfied at spawn. The frame's meaning per type: ball/universal/fixed: origin = anchor; universal: X =
-/// shaft (body1: s1, body2: −s2); hinge: Z = axis; slider: X = axis.
+/// satisfied at spawn. The frame's meaning per type: ball/universal: origin = anchor; fixed: body1's frame;
+/// universal: X = shaft 1 at the load pose (= −shaft 2 for the usual opposite shafts); hinge: Z = axis; slider:
+/// X = axis.
 struct FigureConstraint {
     std::string name;
     text::SourceLocation location;
