@@ -13,6 +13,8 @@ void addParseCommand(CLI::App& app, int& exitCode);
 void addFmtCommand(CLI::App& app, int& exitCode);
 /// Registers `afb resolve`.
 void addResolveCommand(CLI::App& app, int& exitCode);
+/// Registers `afb drop`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
+void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv);
 /// Registers `afb inspect`.
 void addInspectCommand(CLI::App& app, int& exitCode);
 

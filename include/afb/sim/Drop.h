@@ -1,0 +1,59 @@
+#pragma once
+// Drop tests: figures dropped onto a ground plane, measured for speed, accuracy and stability while they fall.
+// Shared by `afb drop`, tests and benchmarks (ARCHITECTURE.md: src/sim).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "afb/figure/Figure.h"
+
+namespace afb::sim {
+
+/// How a drop is run. Times in seconds, lengths in metres.
+struct DropOptions {
+    double heightM = 1.0;          ///< lowest point of each figure above the ground at spawn
+    int count = 1;                 ///< instances of the figure, on a grid in one world (or split over worlds)
+    int worlds = 1;                ///< independent worlds the instances are split over, each on its own thread
+    std::optional<std::uint32_t> seed; ///< random initial orientations (yaw and a tilt); none: yaw = 37°·i
+    double seconds = 10.0;         ///< simulated time (ignored when steps is set)
+    std::optional<int> steps;      ///< exact number of steps; 0 reports the spawn pose
+    double hz = 60.0;              ///< fixed step rate
+    int substeps = 1;              ///< Bullet substeps per step (each of 1/(hz·substeps) s)
+    int iterations = 10;           ///< solver iterations of the world
+    int constraintIterations = 20; ///< per-constraint iterations of the figure's joints (SpawnOptions)
+    bool sleeping = true;          ///< the figure's rest rules put it to sleep
+    bool stopAtRest = false;       ///< end the run as soon as every instance is at rest
+};
+
+/// One joint of a settled pose: model space of the instance, metres.
+struct JointPose {
+    std::string name;
+    double position[3];
+    double quaternion[4]; ///< w, x, y, z
+};
+
+/// What a drop measured (field names are those of the JSON and CSV reports).
+struct DropResult {
+    std::string figure;
+    std::string precision; ///< "float" or "double" (btScalar of the Bullet build)
+    int bodies = 0, constraints = 0, steps = 0;
+    double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
+    long long awakeBodySteps = 0;
+    double maxAnchorErrorM = 0, maxLimitViolationDeg = 0, maxPenetrationM = 0, maxEnergyGainJ = 0;
+    double maxSpeedMps = 0;
+    bool exploded = false;
+    std::optional<double> explodedAtS;
+    std::optional<double> settleTimeS;
+    double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz
+    std::vector<JointPose> finalPose;         ///< first instance, model space
+};
+
+/// Runs one drop of `figure`. Deterministic for a given build, options and input.
+DropResult runDrop(const figure::Figure& figure, const DropOptions& options);
+
+/// The Bullet version this library was built against, e.g. "3.24", and "float"/"double".
+std::string bulletVersion();
+const char* bulletPrecision();
+
+} // namespace afb::sim
