@@ -31,3 +31,19 @@ afb_cli_test(resolve_chain 0 ARGS resolve --base . chain
              MATCH "models/md5/props/chain/chain.md5mesh" "af_pose.md5anim" "chain.af")
 afb_cli_test(resolve_json 0 ARGS resolve --json --base . chain MATCH "\"figure\": *\"chain\"")
 afb_cli_test(resolve_unknown 1 ARGS resolve --base . no_such_entity MATCH "no_such_entity")
+
+# afb golden: determinism, input-change detection, and a pose difference that names the joints.
+add_test(NAME cli.golden_behaviour
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/golden_behaviour" -P ${CMAKE_CURRENT_LIST_DIR}/golden.cmake)
+# The project's own goldens (tests/golden/*.json) must hold.
+file(GLOB _afb_goldens CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/golden/*.json)
+if(_afb_goldens)
+  afb_cli_test(golden_compare 0 ARGS golden compare ${_afb_goldens})
+endif()
+# afb drop: the spawn pose with --steps 0, a JSON report, and a real drop of the bundled chain.
+afb_cli_test(drop_chain 0 ARGS drop --base . chain --seconds 2 MATCH "chain" "Bullet 3")
+afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"steps\": 0" "\"final_pose\"" "\"us_per_step\"")
+afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision double MATCH "\\(double\\)")
+afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
+afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
