@@ -147,7 +147,7 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
             {"tolerance", {{"position_m", rec->positionM}, {"angle_deg", rec->angleDeg}}},
             {"settle_time_s", run.result->settleTimeS ? nlohmann::json(*run.result->settleTimeS) : nlohmann::json(nullptr)},
             {"state_hash", stateHash(*run.result)},
-            {"entity", {{"position", {run.result->entity[0], run.result->entity[1], run.result->entity[2]}},
+            {"entity_transform", {{"position", {run.result->entity[0], run.result->entity[1], run.result->entity[2]}},
                         {"quaternion", {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}}}},
             {"pose", pose}};
         std::ofstream(rec->out) << g.dump(2) << "\n";
@@ -208,7 +208,7 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
                                {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}});
             nowPose.insert(nowPose.end(), run.result->finalPose.begin(), run.result->finalPose.end());
             nlohmann::json expected = nlohmann::json::array();
-            if (g.contains("entity")) expected.push_back(g["entity"]);
+            if (g.contains("entity_transform")) expected.push_back(g["entity_transform"]);
             else expected.push_back({{"position", {0, 0, 0}}, {"quaternion", {1, 0, 0, 0}}});
             for (const auto& j : joints) expected.push_back(j);
             for (std::size_t i = 0; i < expected.size() && i < nowPose.size(); ++i) {

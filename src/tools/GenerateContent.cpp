@@ -564,10 +564,10 @@ std::string humanoidAf(const Skeleton& sk) {
     af.settings("model_humanoid", 70);
     const double s45 = rnd(std::sin(45 * kDeg), 6);
 
-    af.body("pelvis", "origin", shape(ShapeKind::Box, {-4.5, -6.5, -4}, {4.5, 6.5, 4}), lit(0, 0, 38), 11,
+    af.body("pelvis", "origin", shape(ShapeKind::Box, {-4.5, -6.5, -4}, {4.5, 6.5, 4}), lit(0, 0, 38), 10,
             "*origin -*spine -*l_thigh -*r_thigh")
         .friction = BodyFriction{0.01, 0.01, 0.8};
-    af.body("torso", "spine", shape(ShapeKind::Box, {-4, -6.5, -7.5}, {4, 6.5, 7.5}), boneCenter("spine", "neck"), 20,
+    af.body("torso", "spine", shape(ShapeKind::Box, {-4, -6.5, -7.5}, {4, 6.5, 7.5}), boneCenter("spine", "neck"), 14,
             "*spine -*neck -*l_upperarm -*r_upperarm")
         .friction = BodyFriction{0.01, 0.01, 0.8};
     af.body("head", "neck", shape(ShapeKind::Dodecahedron, {-4, -3.8, -1.5}, {4.5, 3.8, 8.5}), jointV("head"), 5,
@@ -577,26 +577,26 @@ std::string humanoidAf(const Skeleton& sk) {
         const std::string p = side;
         const bool left = p == "l";
         af.body(p + "_upperarm", p + "_upperarm", boneShape(p + "_upperarm", p + "_forearm", 4),
-                boneCenter(p + "_upperarm", p + "_forearm"), 2.8, "*" + p + "_upperarm -*" + p + "_forearm");
+                boneCenter(p + "_upperarm", p + "_forearm"), 3.5, "*" + p + "_upperarm -*" + p + "_forearm");
         af.body(p + "_forearm", p + "_forearm", boneShape(p + "_forearm", p + "_hand", 3.5),
-                boneCenter(p + "_forearm", p + "_hand"), 1.8, "*" + p + "_forearm -*" + p + "_hand");
+                boneCenter(p + "_forearm", p + "_hand"), 2.5, "*" + p + "_forearm -*" + p + "_hand");
         // The hand box runs along the arm: roll turns its local Y onto the arm direction.
         AfBody& hand = af.body(p + "_hand", p + "_hand",
                                left ? shape(ShapeKind::Box, {-1, 0.5, -2}, {1, 5.5, 2})
                                     : shape(ShapeKind::Box, {-1, -5.5, -2}, {1, -0.5, 2}),
-                               jointV(p + "_hand"), 1.2, "*" + p + "_hand", false);
+                               jointV(p + "_hand"), 1.5, "*" + p + "_hand", false);
         hand.angles = lit(0, 0, left ? -45 : 45);
         hand.friction = BodyFriction{0.02, 0.02, 0.9};
     }
     for (const char* side : {"l", "r"}) {
         const std::string p = side;
         af.body(p + "_thigh", p + "_thigh", boneShape(p + "_thigh", p + "_shin", 5.5),
-                boneCenter(p + "_thigh", p + "_shin"), 8, "*" + p + "_thigh -*" + p + "_shin");
+                boneCenter(p + "_thigh", p + "_shin"), 9, "*" + p + "_thigh -*" + p + "_shin");
         AfBody& shin = af.body(p + "_shin", p + "_shin", boneShape(p + "_shin", p + "_foot", 4.5),
-                               boneCenter(p + "_shin", p + "_foot"), 4, "*" + p + "_shin -*" + p + "_foot");
+                               boneCenter(p + "_shin", p + "_foot"), 5, "*" + p + "_shin -*" + p + "_foot");
         shin.inertiaScale = std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 2}; // more spin inertia: a steadier bone
         af.body(p + "_foot", p + "_foot", shape(ShapeKind::Box, {-2.5, -1.8, -3}, {8, 1.8, 1}), jointV(p + "_foot"),
-                1.4, "*" + p + "_foot")
+                2, "*" + p + "_foot")
             .friction = BodyFriction{0.01, 0.01, 1};
     }
 
