@@ -23,9 +23,9 @@ if(NOT h1 STREQUAL h2)
 endif()
 run(0 out "${AFB}" golden compare --exact "${TMP}/first.json")
 
-# A deliberate change: the chain's hook moves 4 units up, so the whole chain hangs 4 units (0.1 m) higher.
+# A deliberate change: the hook moves 8 units (0.2 m) sideways, so the chain swings to hang below it.
 file(READ "${TMP}/af/chain.af" af)
-string(REPLACE "body2 \"world\"\n\t\tanchor joint( \"link1\" )" "body2 \"world\"\n\t\tanchor ( 0, 0, 104 )" changed "${af}")
+string(REPLACE "body2 \"world\"\n\t\tanchor joint( \"link1\" )" "body2 \"world\"\n\t\tanchor ( 8, 0, 100 )" changed "${af}")
 if(changed STREQUAL af)
   message(FATAL_ERROR "the test's edit of af/chain.af did not apply")
 endif()
