@@ -200,6 +200,13 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
         auto body = std::make_unique<btRigidBody>(info);
         body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
+        if (options.continuousCollision) {
+            // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
+            // fast thin limb cannot pass into or through the ground between two steps.
+            const btScalar r = static_cast<btScalar>(m_asset->innerRadius(static_cast<int>(i)));
+            body->setCcdMotionThreshold(r);
+            body->setCcdSweptSphereRadius(r);
+        }
         int mask = options.collisionMask;
         if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
         if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests

@@ -3,6 +3,7 @@
 #include <LinearMath/btGeometryUtil.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "afb/bullet/Convert.h"
@@ -63,6 +64,7 @@ std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) 
             asset->m_shapes.push_back(std::move(hull));
         }
         asset->m_margins.push_back(margin);
+        asset->m_innerRadii.push_back(std::isfinite(inradius) ? inradius : 0.0);
     }
     return asset;
 }

@@ -47,3 +47,11 @@ afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"st
 afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision double MATCH "\\(double\\)")
 afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
+
+# The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
+if(TARGET afb_gen_content)
+  add_test(NAME cli.content_reproducible
+           COMMAND ${CMAKE_COMMAND} -DGEN=$<TARGET_FILE:afb_gen_content> -DSOURCE=${PROJECT_SOURCE_DIR}
+                   -DWORK=${CMAKE_CURRENT_BINARY_DIR}/content_check
+                   -P ${PROJECT_SOURCE_DIR}/tests/cli/content.cmake)
+endif()

@@ -29,6 +29,8 @@ struct SpawnOptions {
     /// Apply the figure's rest rules (§6.1) and put it to sleep when they say so (the engine's comeToRest).
     /// Off: the ragdoll never rests by itself (putToRest still works).
     bool comeToRest = true;
+    /// Continuous collision for bodies that move more than their inner radius in one step (Bullet's CCD).
+    bool continuousCollision = true;
 };
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes

@@ -31,12 +31,16 @@ class RagdollAsset {
     btCollisionShape* shape(int body) const { return m_shapes[static_cast<std::size_t>(body)].get(); }
     /// The margin the shape of body `body` uses, metres.
     double margin(int body) const { return m_margins[static_cast<std::size_t>(body)]; }
+    /// Distance from the centre of mass of body `body` to its nearest face, metres (its inscribed radius about
+    /// the centre of mass): the radius of its continuous-collision sphere.
+    double innerRadius(int body) const { return m_innerRadii[static_cast<std::size_t>(body)]; }
 
   private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
     figure::Figure m_figure;
     std::vector<std::unique_ptr<btCollisionShape>> m_shapes;
     std::vector<double> m_margins;
+    std::vector<double> m_innerRadii;
 };
 
 } // namespace afb::bullet
