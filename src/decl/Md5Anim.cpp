@@ -1,5 +1,6 @@
 #include "afb/decl/Md5Anim.h"
 
+#include "Md5Common.h"
 #include "afb/text/Files.h"
 #include "afb/text/Lexer.h"
 
@@ -23,22 +24,14 @@ constexpr std::int64_t kMd5Version = 10;
 constexpr std::size_t kMinJointBytes = 21; // `""0 0 0` in hierarchy plus `(0 0 0)(0 0 0)` in baseframe
 constexpr std::size_t kMinFrameBytes = 23; // `(0 0 0)(0 0 0)` in bounds plus `frame 0{}`; values add 2 each
 
-// A count is only known to fit the input; reserve at most this many entries up front, so that memory follows
-// the entries actually read rather than the claim.
-constexpr std::size_t kMaxReserve = 4096;
-std::size_t reserveFor(int count) {
-    return std::min(static_cast<std::size_t>(count), kMaxReserve);
-}
-
-std::string quotedName(std::string_view s) {
-    return "\"" + std::string(s.substr(0, 60)) + "\"";
-}
+using detail::quotedName;
+using detail::reserveFor;
 
 // af-format §7.4: a fixed sequence of sections, each with exactly the announced number of entries.
-class AnimParser {
+class AnimParser : detail::Md5ParserBase {
   public:
     AnimParser(std::string_view source, const std::string& fileName, text::Diagnostics& diagnostics)
-        : m_src(source), m_lex(source, fileName, diagnostics) {}
+        : Md5ParserBase(source, fileName, diagnostics) {}
 
     Md5Anim parse() {
         Md5Anim anim;
@@ -116,47 +109,6 @@ class AnimParser {
     }
 
   private:
-    void expectKeyword(std::string_view keyword, std::string_view context) {
-        const Token t = m_lex.next();
-        if (!t.isName(keyword))
-            m_lex.fail(t, "expected '" + std::string(keyword) + "' " + std::string(context) + ", found " +
-                              t.describe());
-    }
-
-    // Bytes of input after `t`, a number token (its text lies in the source; joined strings would not).
-    std::size_t bytesAfter(const Token& t) const {
-        const std::less<const char*> before;
-        if (t.kind != TokenKind::Number || before(t.text.data(), m_src.data()) ||
-            before(m_src.data() + m_src.size(), t.text.data()))
-            return m_src.size();
-        const auto start = static_cast<std::size_t>(t.text.data() - m_src.data());
-        return m_src.size() - std::min(m_src.size(), start + t.text.size());
-    }
-
-    // A header count, checked against what the rest of the input could hold before anyone allocates for it.
-    int parseSizedCount(std::string_view what, std::size_t minBytesPerEntry) {
-        const Token t = m_lex.peek();
-        const std::uint64_t n =
-            m_lex.parseCount(what, static_cast<std::uint64_t>(std::numeric_limits<int>::max()));
-        const std::size_t room = bytesAfter(t) / minBytesPerEntry;
-        if (n > room)
-            m_lex.fail(t, std::string(what) + " " + std::string(t.text) +
-                              " is more than the file can hold (the rest of the file has room for at most " +
-                              std::to_string(room) + ")");
-        return static_cast<int>(n);
-    }
-
-    Vec3 parseVec3(std::string_view what) {
-        const std::string context = "around " + std::string(what);
-        Vec3 v;
-        m_lex.expectPunct('(', context);
-        v.x = m_lex.parseFloat(what);
-        v.y = m_lex.parseFloat(what);
-        v.z = m_lex.parseFloat(what);
-        m_lex.expectPunct(')', context);
-        return v;
-    }
-
     // `name { <count> lines }`, each line read by `parseLine(index)`.
     template <class ParseLine>
     void parseBlock(std::string_view name, int count, std::string_view countName, ParseLine&& parseLine) {
@@ -245,8 +197,6 @@ class AnimParser {
         return values;
     }
 
-    std::string_view m_src;
-    Lexer m_lex;
 };
 
 } // namespace

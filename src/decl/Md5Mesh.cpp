@@ -1,5 +1,6 @@
 #include "afb/decl/Md5Mesh.h"
 
+#include "Md5Common.h"
 #include "afb/text/Files.h"
 #include "afb/text/Lexer.h"
 
@@ -25,23 +26,15 @@ constexpr std::size_t kMinVertBytes = 14;   // `vert 0(0 0)0 1`
 constexpr std::size_t kMinTriBytes = 11;    // `tri 0 0 0 0`
 constexpr std::size_t kMinWeightBytes = 19; // `weight 0 0 0(0 0 0)`
 
-// A count is only known to fit the input; reserve at most this many entries up front, so that memory follows
-// the entries actually read rather than the claim.
-constexpr std::size_t kMaxReserve = 4096;
-std::size_t reserveFor(int count) {
-    return std::min(static_cast<std::size_t>(count), kMaxReserve);
-}
-
-std::string quotedName(std::string_view s) {
-    return "\"" + std::string(s.substr(0, 60)) + "\"";
-}
+using detail::quotedName;
+using detail::reserveFor;
 
 // af-format §7.3. The engine reads this grammar as a fixed sequence of expected tokens (no non-fatal flag),
 // so every deviation is an error; on top of it every count, index and reference is checked here.
-class MeshParser {
+class MeshParser : detail::Md5ParserBase {
   public:
     MeshParser(std::string_view source, const std::string& fileName, text::Diagnostics& diagnostics)
-        : m_src(source), m_lex(source, fileName, diagnostics) {}
+        : Md5ParserBase(source, fileName, diagnostics) {}
 
     Md5Mesh parse() {
         Md5Mesh mesh;
@@ -102,36 +95,6 @@ class MeshParser {
         throw text::ParseError({m_lex.fileName(), w.line, w.column}, message);
     }
 
-    void expectKeyword(std::string_view keyword, std::string_view context) {
-        const Token t = m_lex.next();
-        if (!t.isName(keyword))
-            m_lex.fail(t, "expected '" + std::string(keyword) + "' " + std::string(context) + ", found " +
-                              t.describe());
-    }
-
-    // Bytes of input after `t`, a number token (its text lies in the source; joined strings would not).
-    std::size_t bytesAfter(const Token& t) const {
-        const std::less<const char*> before;
-        if (t.kind != TokenKind::Number || before(t.text.data(), m_src.data()) ||
-            before(m_src.data() + m_src.size(), t.text.data()))
-            return m_src.size();
-        const auto start = static_cast<std::size_t>(t.text.data() - m_src.data());
-        return m_src.size() - std::min(m_src.size(), start + t.text.size());
-    }
-
-    // A header count, checked against what the rest of the input could hold before anyone allocates for it.
-    int parseSizedCount(std::string_view what, std::size_t minBytesPerEntry) {
-        const Token t = m_lex.peek();
-        const std::uint64_t n =
-            m_lex.parseCount(what, static_cast<std::uint64_t>(std::numeric_limits<int>::max()));
-        const std::size_t room = bytesAfter(t) / minBytesPerEntry;
-        if (n > room)
-            m_lex.fail(t, std::string(what) + " " + std::string(t.text) +
-                              " is more than the file can hold (the rest of the file has room for at most " +
-                              std::to_string(room) + ")");
-        return static_cast<int>(n);
-    }
-
     // md5 entries are numbered 0, 1, 2, … in order; anything else is an error.
     void expectOrdinal(std::string_view what, std::string_view lineKeyword, int expected) {
         const Token t = m_lex.peek();
@@ -162,17 +125,6 @@ class MeshParser {
             m_lex.fail(t, "expected '" + std::string(keyword) + "' after the " + std::string(countName) +
                               " " + std::to_string(count) + " '" + std::string(listKeyword) +
                               "' lines, found " + t.describe());
-    }
-
-    Vec3 parseVec3(std::string_view what) {
-        const std::string context = "around " + std::string(what);
-        Vec3 v;
-        m_lex.expectPunct('(', context);
-        v.x = m_lex.parseFloat(what);
-        v.y = m_lex.parseFloat(what);
-        v.z = m_lex.parseFloat(what);
-        m_lex.expectPunct(')', context);
-        return v;
     }
 
     Md5Joint parseJoint(int index) {
@@ -292,8 +244,6 @@ class MeshParser {
         return sub;
     }
 
-    std::string_view m_src;
-    Lexer m_lex;
 };
 
 } // namespace
