@@ -15,6 +15,23 @@ using ConstraintType = decl::ConstraintType;
 
 namespace {
 
+// Marks a ragdoll body that wants the engine's contact friction (btCollisionObject user index 2).
+constexpr int kEngineFrictionMarker = 0x41464246; // "AFBF"
+
+bool isEngineFrictionBody(const btCollisionObject* o) { return o->getUserIndex2() == kEngineFrictionMarker; }
+
+// af-format §4.8: min(f1, f2) between two ragdoll bodies, the ragdoll body's own value against anything else.
+bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int,
+                           const btCollisionObjectWrapper* w1, int, int) {
+    const btCollisionObject* a = w0->getCollisionObject();
+    const btCollisionObject* b = w1->getCollisionObject();
+    const bool ra = isEngineFrictionBody(a), rb = isEngineFrictionBody(b);
+    if (ra && rb) cp.m_combinedFriction = btMin(a->getFriction(), b->getFriction());
+    else if (ra) cp.m_combinedFriction = a->getFriction();
+    else if (rb) cp.m_combinedFriction = b->getFriction();
+    return true;
+}
+
 // Fixed restitution of AF bodies (af-format §3.4; the engine applies it above 2 units/s only).
 constexpr btScalar kRestitution = btScalar(0.4);
 
@@ -124,6 +141,13 @@ class Ragdoll::Action : public btActionInterface {
     bool m_havePrevious = false;
 };
 
+bool installEngineContactFriction() {
+    if (gContactAddedCallback == &engineContactFriction) return true;
+    if (gContactAddedCallback != nullptr) return false;
+    gContactAddedCallback = &engineContactFriction;
+    return true;
+}
+
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
     : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>(*this, options.comeToRest)) {
     addBodies(options);
@@ -210,6 +234,10 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         int mask = options.collisionMask;
         if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
         if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
+        if (options.engineContactFriction) {
+            body->setUserIndex2(kEngineFrictionMarker);
+            body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+        }
         m_world.addRigidBody(body.get(), options.collisionGroup, mask);
         m_bodies.push_back(std::move(body));
     }

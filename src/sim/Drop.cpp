@@ -178,6 +178,7 @@ std::string bulletVersion() {
 const char* bulletPrecision() { return sizeof(btScalar) == sizeof(double) ? "double" : "float"; }
 
 DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
+    bullet::installEngineContactFriction(); // the drop tool owns its process: the engine's contact friction
     const auto asset = RagdollAsset::create(figure);
     const int count = std::max(1, o.count);
     const int worlds = std::clamp(o.worlds, 1, count);

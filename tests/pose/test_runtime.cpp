@@ -247,3 +247,38 @@ TEST_CASE("spawn and remove cycles leave the world as it was", "[runtime]") {
     }
     CHECK(asset.use_count() == 1);
 }
+
+#include "FigureFixture.h"
+
+TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies, own value against the world",
+          "[runtime]") {
+    REQUIRE(afb::bullet::installEngineContactFriction());
+    // Two loose boxes of one figure, the upper one resting on the lower one, the lower one on the ground.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"low", 0, 0, 0, 2}, {"high", 1, 0, 0, 6}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure f {\n"
+        " body \"low\" { joint \"origin\" model box( ( -8, -8, -2 ), ( 8, 8, 2 ) ) origin ( 0, 0, 2 ) density 0.02 "
+        "friction 0.01, 0.01, 0.5 }\n"
+        " body \"high\" { joint \"high\" model box( ( -4, -4, -2 ), ( 4, 4, 2 ) ) origin ( 0, 0, 6 ) density 0.02 "
+        "friction 0.01, 0.01, 0.3 }\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    World w;
+    w.addGround();
+    w.ground->setFriction(btScalar(0.7));
+    Ragdoll ragdoll(RagdollAsset::create(*built.figure), w.world, {.comeToRest = false});
+    w.step(30);
+    int checked = 0;
+    for (int m = 0; m < w.dispatcher.getNumManifolds(); ++m) {
+        const btPersistentManifold* man = w.dispatcher.getManifoldByIndexInternal(m);
+        const bool withGround = man->getBody0() == w.ground.get() || man->getBody1() == w.ground.get();
+        for (int c = 0; c < man->getNumContacts(); ++c) {
+            const double f = man->getContactPoint(c).m_combinedFriction;
+            // Ground: low's own 0.5 (Bullet's product would be 0.35); boxes: min(0.5, 0.3) (product 0.15).
+            CHECK(f == Approx(withGround ? 0.5 : 0.3));
+            ++checked;
+        }
+    }
+    CHECK(checked >= 8);
+}

@@ -31,7 +31,17 @@ struct SpawnOptions {
     bool comeToRest = true;
     /// Continuous collision for bodies that move more than their inner radius in one step (Bullet's CCD).
     bool continuousCollision = true;
+    /// The engine's contact friction (§4.8): min of the two bodies' values between ragdoll bodies, the ragdoll
+    /// body's own value against anything else, instead of Bullet's product. Needs Bullet's one global contact
+    /// callback: see installEngineContactFriction(); without it this flag has no effect.
+    bool engineContactFriction = true;
 };
+
+/// Installs Bullet's global contact-added callback (gContactAddedCallback) with the engine's friction combination
+/// for ragdoll bodies spawned with `engineContactFriction`; other objects are left as Bullet combines them.
+/// Bullet has one such callback per process: returns false (and installs nothing) when another one is set.
+/// Idempotent; call it once at start-up if you want the engine's contact friction.
+bool installEngineContactFriction();
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
