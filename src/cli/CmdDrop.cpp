@@ -121,7 +121,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                 continue;
             }
             if (::isatty(STDERR_FILENO)) std::fprintf(stderr, "  dropping %s x %d ...\r", e.c_str(), opt->drop.count);
-            results.push_back(sim::runDrop(loaded->figure, opt->drop));
+            sim::DropOptions drop = opt->drop;
+            drop.startAtRest = loaded->startAtRest; // "nodrop"/"sleep" entities hang until touched
+            results.push_back(sim::runDrop(loaded->figure, drop));
         }
         std::fflush(stdout);
         printDiagnostics(diags);

@@ -87,7 +87,11 @@ Run runScenario(const std::filesystem::path& base, const std::string& entity, co
     if (!lib) return run;
     run.resolved = lib->resolveEntity(entity, diags);
     auto loaded = figure::loadEntityFigure(*lib, entity, {}, diags);
-    if (run.resolved && loaded) run.result = sim::runDrop(loaded->figure, o);
+    if (run.resolved && loaded) {
+        sim::DropOptions drop = o;
+        drop.startAtRest = loaded->startAtRest;
+        run.result = sim::runDrop(loaded->figure, drop);
+    }
     return run;
 }
 

@@ -1,5 +1,7 @@
 #include "afb/figure/Load.h"
 
+#include <cstdlib>
+
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/text/Lexer.h"
@@ -44,7 +46,16 @@ std::optional<LoadedFigure> loadEntityFigure(const decl::Library& library, std::
     // §2.1: actors ("ragdoll") replace the root translation by the offset; AF entities add it.
     const RootTranslation root =
         r->figureKey == "ragdoll" ? RootTranslation::ReplacedByOffset : RootTranslation::OffsetAdded;
-    return loadFigureFiles(r->figureFile, r->figureName, r->meshPath, r->afPosePath, offset, units, diagnostics, root);
+    std::optional<LoadedFigure> loaded =
+        loadFigureFiles(r->figureFile, r->figureName, r->meshPath, r->afPosePath, offset, units, diagnostics, root);
+    if (loaded) {
+        auto on = [&](std::string_view key) {
+            const std::optional<std::string> v = r->get(key);
+            return v && !v->empty() && std::atof(v->c_str()) != 0.0;
+        };
+        loaded->startAtRest = on("nodrop") || on("sleep");
+    }
+    return loaded;
 }
 
 } // namespace afb::figure

@@ -99,6 +99,7 @@ Partial runWorld(const figure::Figure& f, const std::shared_ptr<const RagdollAss
         so.entityTransform = t;
         so.constraintIterations = o.constraintIterations;
         so.comeToRest = o.sleeping;
+        so.startAtRest = o.startAtRest;
         dolls.push_back(std::make_unique<Ragdoll>(asset, world, so));
     }
     out.restTimes.assign(dolls.size(), -1);

@@ -53,7 +53,8 @@ afb::figure::LoadedFigure load(const std::filesystem::path& base, const std::str
 
 // The sets a runtime test runs on: the bundled chain, plus the corpus' complete zsec sets when present.
 std::vector<std::pair<std::filesystem::path, std::string>> entities() {
-    std::vector<std::pair<std::filesystem::path, std::string>> out = {{afb::test::sourceDir(), "chain"}};
+    std::vector<std::pair<std::filesystem::path, std::string>> out;
+    for (const char* e : {"chain", "humanoid", "props", "lamp", "buggy"}) out.emplace_back(afb::test::sourceDir(), e);
     if (const auto corpus = afb::test::corpusDir())
         for (const char* e : {"monster_zsec_pistol", "monster_zsec_shotgun", "monster_zsec_machinegun"})
             out.emplace_back(*corpus / "doom3-kroom3/base", e);
@@ -281,4 +282,31 @@ TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies
         }
     }
     CHECK(checked >= 8);
+}
+
+TEST_CASE("drop: every bundled figure settles by its own rules, without exploding", "[runtime]") {
+    afb::bullet::installEngineContactFriction();
+    for (const char* entity : {"humanoid", "props", "buggy", "lamp", "chain"}) {
+        const afb::figure::LoadedFigure loaded = load(afb::test::sourceDir(), entity);
+        const afb::figure::Figure& f = loaded.figure;
+        World w;
+        w.addGround();
+        btTransform spawn = btTransform::getIdentity();
+        spawn.setOrigin(btVector3(0, 0, 0.5f));
+        Ragdoll ragdoll(RagdollAsset::create(f), w.world, {.entityTransform = spawn});
+        const int limitSteps = static_cast<int>((f.rest.maxMoveTimeS > 0 ? f.rest.maxMoveTimeS : 10.0) * 60) + 2;
+        int steps = 0;
+        while (!ragdoll.atRest() && steps < limitSteps) {
+            w.step(1);
+            ++steps;
+        }
+        INFO(entity << ": " << steps << " steps");
+        CHECK(ragdoll.atRest());
+        for (const Transform& t : ragdoll.bodyTransforms()) CHECK(t.position.allFinite());
+    }
+}
+
+TEST_CASE("an entity with \"sleep\" or \"nodrop\" spawns at rest", "[runtime]") {
+    CHECK(load(afb::test::sourceDir(), "humanoid_sleeping").startAtRest);
+    CHECK_FALSE(load(afb::test::sourceDir(), "humanoid").startAtRest);
 }

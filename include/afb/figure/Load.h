@@ -17,6 +17,9 @@ struct LoadedFigure {
     decl::Md5Mesh mesh;          ///< the md5mesh the skeleton came from
     decl::AfDecl decl;           ///< the articulatedFigure decl as parsed
     std::filesystem::path afFile; ///< where the decl came from
+    /// The entity asks to spawn at rest until touched: `"nodrop" "1"` (the engine's key) or `"sleep" "1"` (the
+    /// id modding page's spelling). Always false for loadFigureFiles.
+    bool startAtRest = false;
 };
 
 /// Resolves `entity` in `library` (inherit chain, model decl, mesh, af_pose, figure) and builds its figure.

@@ -24,6 +24,7 @@ struct DropOptions {
     int constraintIterations = 20; ///< per-constraint iterations of the figure's joints (SpawnOptions)
     bool sleeping = true;          ///< the figure's rest rules put it to sleep
     bool stopAtRest = false;       ///< end the run as soon as every instance is at rest
+    bool startAtRest = false;      ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
 };
 
 /// One joint of a settled pose: model space of the instance, metres.

@@ -20,7 +20,8 @@ enum class TokenKind : std::uint8_t {
     Punct,   ///< one punctuation character
 };
 
-/// One token. `text` points into the lexer's source, which must outlive the token.
+/// One token. `text` points into the lexer's source (or, for a string joined by a backslash continuation, into the
+/// lexer's own storage); the lexer and its source must outlive the token.
 struct Token {
     TokenKind kind = TokenKind::End;
     std::string_view text;       ///< as written (String/Literal: without the quotes)
