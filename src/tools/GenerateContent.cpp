@@ -332,26 +332,10 @@ std::string writeAfPose(const Skeleton& sk, const std::vector<Mesh>& meshes, con
 
 AfVector lit(double x, double y, double z) { return AfVector::fromLiteral({rnd(x, 6), rnd(y, 6), rnd(z, 6)}); }
 AfVector lit(const Vector3d& v) { return lit(v.x(), v.y(), v.z()); }
-AfVector jointV(const std::string& j) {
-    AfVector v;
-    v.form = AfVector::Form::Joint;
-    v.joint1 = j;
-    return v;
-}
-AfVector boneCenter(const std::string& a, const std::string& b) {
-    AfVector v;
-    v.form = AfVector::Form::BoneCenter;
-    v.joint1 = a;
-    v.joint2 = b;
-    return v;
-}
+AfVector jointV(const std::string& j) { return AfVector::fromJoint(j); }
+AfVector boneCenter(const std::string& a, const std::string& b) { return AfVector::fromBoneCenter(a, b); }
 AfVector boneDir(const std::string& a, const std::string& b, bool negated = false) {
-    AfVector v;
-    v.form = AfVector::Form::BoneDir;
-    v.joint1 = a;
-    v.joint2 = b;
-    v.negated = negated;
-    return v;
+    return AfVector::fromBoneDir(a, b, negated);
 }
 
 AfShape shape(ShapeKind kind, Vector3d lo, Vector3d hi, std::int64_t sides = 3) {

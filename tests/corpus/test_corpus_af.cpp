@@ -58,19 +58,8 @@ std::size_t countBlockLines(const std::string& text, const std::vector<std::stri
 }
 
 AfVector lit(double x, double y, double z) { return AfVector::fromLiteral({x, y, z}); }
-AfVector jointVec(const std::string& j) {
-    AfVector v;
-    v.form = AfVector::Form::Joint;
-    v.joint1 = j;
-    return v;
-}
-AfVector boneCenter(const std::string& a, const std::string& b) {
-    AfVector v;
-    v.form = AfVector::Form::BoneCenter;
-    v.joint1 = a;
-    v.joint2 = b;
-    return v;
-}
+AfVector jointVec(const std::string& j) { return AfVector::fromJoint(j); }
+AfVector boneCenter(const std::string& a, const std::string& b) { return AfVector::fromBoneCenter(a, b); }
 
 const AfBody* bodyNamed(const AfDecl& d, const std::string& name) {
     for (const AfBody& b : d.bodies)

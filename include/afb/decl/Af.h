@@ -31,6 +31,16 @@ struct AfVector {
     bool operator==(const AfVector&) const = default;
 
     static AfVector fromLiteral(Vec3 v) { return AfVector{Form::Literal, false, v, {}, {}}; }
+    /// `joint( j )`.
+    static AfVector fromJoint(std::string j) { return AfVector{Form::Joint, false, {}, std::move(j), {}}; }
+    /// `bonecenter( a, b )`.
+    static AfVector fromBoneCenter(std::string a, std::string b) {
+        return AfVector{Form::BoneCenter, false, {}, std::move(a), std::move(b)};
+    }
+    /// `bonedir( a, b )`, negated when `negated`.
+    static AfVector fromBoneDir(std::string a, std::string b, bool negated = false) {
+        return AfVector{Form::BoneDir, negated, {}, std::move(a), std::move(b)};
+    }
 };
 
 /// The shape keywords after `model` (af-format §1.5). `custom` is rejected by the parser, as by the engine.
