@@ -26,26 +26,18 @@ btVector3 anyPerpendicular(const btVector3& v) {
 
 } // namespace
 
-// --- DirectionLimitConstraint ---------------------------------------------------------------------------------
+// --- limit rows ---------------------------------------------------------------------------------------------
 
-DirectionLimitConstraint::DirectionLimitConstraint(btRigidBody& a, btRigidBody& b, const btVector3& shaftInA,
-                                                   const btMatrix3x3& basisInB, Shape shape, btScalar halfAngle1Rad,
-                                                   btScalar halfAngle2Rad)
-    : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_shaftInA(shaftInA.normalized()), m_basisInB(basisInB),
-      m_shape(shape), m_half1(halfAngle1Rad), m_half2(halfAngle2Rad) {}
-
-int DirectionLimitConstraint::activeRows(Row rows[2]) const {
-    const btVector3 s = m_rbA.getCenterOfMassTransform().getBasis() * m_shaftInA;
-    const btMatrix3x3 basis = m_rbB.getCenterOfMassTransform().getBasis() * m_basisInB;
+int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape shape, btScalar half1,
+                       btScalar half2, btScalar margin, LimitRow rows[2]) {
     const btVector3 f = basis.getColumn(0), l = basis.getColumn(1), u = basis.getColumn(2);
     int n = 0;
-    if (m_shape == Shape::Cone) {
-        const btScalar c = btClamped(s.dot(f), btScalar(-1), btScalar(1));
-        const btScalar angle = btAcos(c);
-        if (angle > m_half1) {
+    if (shape == LimitShape::Cone) {
+        const btScalar angle = btAcos(btClamped(s.dot(f), btScalar(-1), btScalar(1)));
+        if (angle - half1 > -margin) {
             const btVector3 axis = f.cross(s);
             const btVector3 j = axis.length2() > SIMD_EPSILON ? axis.normalized() : anyPerpendicular(f);
-            rows[n++] = {j, angle - m_half1};
+            rows[n++] = {j, angle - half1};
         }
         return n;
     }
@@ -56,37 +48,112 @@ int DirectionLimitConstraint::activeRows(Row rows[2]) const {
     if (r1 > SIMD_EPSILON) {
         const btScalar angle = btAtan2(sl, sf);
         const btVector3 j = u - (su / r1) * (sf * f + sl * l);
-        if (angle > m_half1) rows[n++] = {j, angle - m_half1};
-        else if (angle < -m_half1) rows[n++] = {-j, -m_half1 - angle};
+        if (angle - half1 > -margin) rows[n++] = {j, angle - half1};
+        else if (-half1 - angle > -margin) rows[n++] = {-j, -half1 - angle};
     }
     if (r2 > SIMD_EPSILON) {
         const btScalar angle = btAtan2(su, sf);
         const btVector3 j = -l + (sl / r2) * (sf * f + su * u);
-        if (angle > m_half2) rows[n++] = {j, angle - m_half2};
-        else if (angle < -m_half2) rows[n++] = {-j, -m_half2 - angle};
+        if (angle - half2 > -margin) rows[n++] = {j, angle - half2};
+        else if (-half2 - angle > -margin) rows[n++] = {-j, -half2 - angle};
     }
     return n;
 }
 
+int hingeRangeRow(const btMatrix3x3& frameA, const btMatrix3x3& frameB, btScalar lower, btScalar upper,
+                  btScalar margin, LimitRow& row) {
+    // φ: rotation of frame A relative to frame B about B's Z; dφ/dt = (ωA − ωB)·z.
+    const btMatrix3x3 rel = frameB.transpose() * frameA;
+    const btScalar phi = btAtan2(rel[1][0], rel[0][0]);
+    const btScalar centre = btScalar(0.5) * (lower + upper), half = btScalar(0.5) * (upper - lower);
+    const btScalar d = btNormalizeAngle(phi - centre);
+    const btVector3 z = frameB.getColumn(2);
+    if (d - half > -margin && d >= 0) {
+        row = {z, d - half};
+        return 1;
+    }
+    if (-half - d > -margin && d < 0) {
+        row = {-z, -half - d};
+        return 1;
+    }
+    return 0;
+}
+
+namespace {
+
+// The speculative margin of a limit: the angle the joint can turn in about two steps at its current rate.
+btScalar speculativeMargin(const btRigidBody& a, const btRigidBody& b, btScalar step) {
+    return (a.getAngularVelocity() - b.getAngularVelocity()).length() * step * 2 + btScalar(0.01);
+}
+
+// A limit row: past the limit, Baumgarte recovery of errorReduction per step; before it (speculative), the
+// joint may close at most the remaining gap in this step.
+void setLimitRow(btTypedConstraint::btConstraintInfo2* info, int i, const LimitRow& r, const LimitRowPolicy& p) {
+    const btScalar rhs = r.excess > 0 ? p.errorReduction * info->fps * r.excess : info->fps * r.excess;
+    // The axis is oriented so that a positive impulse reduces the excess: J·v = −(rate of the excess).
+    setAngularRow(info, i, -r.axisWorld, rhs, 0, kInfinity);
+}
+
+} // namespace
+
+// --- DirectionLimitConstraint ---------------------------------------------------------------------------------
+
+DirectionLimitConstraint::DirectionLimitConstraint(btRigidBody& a, btRigidBody& b, const btVector3& shaftInA,
+                                                   const btMatrix3x3& basisInB, Shape shape, btScalar halfAngle1Rad,
+                                                   btScalar halfAngle2Rad, LimitRowPolicy policy)
+    : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_shaftInA(shaftInA.normalized()), m_basisInB(basisInB),
+      m_shape(shape), m_half1(halfAngle1Rad), m_half2(halfAngle2Rad), m_policy(policy) {}
+
+int DirectionLimitConstraint::rows(LimitRow out[2], btScalar margin) const {
+    return directionLimitRows(m_rbA.getCenterOfMassTransform().getBasis() * m_shaftInA,
+                              m_rbB.getCenterOfMassTransform().getBasis() * m_basisInB, m_shape, m_half1, m_half2,
+                              margin, out);
+}
+
 btScalar DirectionLimitConstraint::violation() const {
-    Row rows[2];
+    LimitRow r[2];
     btScalar worst = 0;
-    for (int i = 0, n = activeRows(rows); i < n; ++i) worst = btMax(worst, rows[i].excess);
+    for (int i = 0, n = rows(r, 0); i < n; ++i) worst = btMax(worst, r[i].excess);
     return worst;
 }
 
 void DirectionLimitConstraint::getInfo1(btConstraintInfo1* info) {
-    Row rows[2];
-    info->m_numConstraintRows = activeRows(rows);
+    LimitRow r[2];
+    m_margin = m_policy.speculative ? speculativeMargin(m_rbA, m_rbB, m_lastStep) : 0;
+    info->m_numConstraintRows = rows(r, m_margin);
     info->nub = 6 - info->m_numConstraintRows;
 }
 
 void DirectionLimitConstraint::getInfo2(btConstraintInfo2* info) {
-    Row rows[2];
-    const int n = activeRows(rows);
-    // Each row's axis is oriented so that a positive impulse reduces the excess: J·v = −(rate of the angle).
-    for (int i = 0; i < n; ++i)
-        setAngularRow(info, i, -rows[i].axisWorld, kErrorReduction * info->fps * rows[i].excess, 0, kInfinity);
+    LimitRow r[2];
+    m_lastStep = btScalar(1) / info->fps;
+    for (int i = 0, n = rows(r, m_margin); i < n; ++i) setLimitRow(info, i, r[i], m_policy);
+}
+
+// --- HingeRangeConstraint -------------------------------------------------------------------------------------
+
+HingeRangeConstraint::HingeRangeConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA,
+                                           const btTransform& frameInB, btScalar lowerRad, btScalar upperRad,
+                                           LimitRowPolicy policy)
+    : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_frameInA(frameInA.getBasis()), m_frameInB(frameInB.getBasis()),
+      m_lower(lowerRad), m_upper(upperRad), m_policy(policy) {}
+
+int HingeRangeConstraint::row(LimitRow& out, btScalar margin) const {
+    return hingeRangeRow(m_rbA.getCenterOfMassTransform().getBasis() * m_frameInA,
+                         m_rbB.getCenterOfMassTransform().getBasis() * m_frameInB, m_lower, m_upper, margin, out);
+}
+
+void HingeRangeConstraint::getInfo1(btConstraintInfo1* info) {
+    LimitRow r;
+    m_margin = m_policy.speculative ? speculativeMargin(m_rbA, m_rbB, m_lastStep) : 0;
+    info->m_numConstraintRows = row(r, m_margin);
+    info->nub = 6 - info->m_numConstraintRows;
+}
+
+void HingeRangeConstraint::getInfo2(btConstraintInfo2* info) {
+    LimitRow r;
+    m_lastStep = btScalar(1) / info->fps;
+    if (row(r, m_margin) == 1) setLimitRow(info, 0, r, m_policy);
 }
 
 // --- JointFrictionConstraint ----------------------------------------------------------------------------------

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 
+#include "EngineFriction.h"
 #include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
+#include "afb/bullet/RagdollWorld.h"
 #include "afb/figure/Collision.h"
 
 namespace afb::bullet {
@@ -14,23 +16,6 @@ using figure::FigureConstraint;
 using ConstraintType = decl::ConstraintType;
 
 namespace {
-
-// Marks a ragdoll body that wants the engine's contact friction (btCollisionObject user index 2).
-constexpr int kEngineFrictionMarker = 0x41464246; // "AFBF"
-
-bool isEngineFrictionBody(const btCollisionObject* o) { return o->getUserIndex2() == kEngineFrictionMarker; }
-
-// af-format §4.8: min(f1, f2) between two ragdoll bodies, the ragdoll body's own value against anything else.
-bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int,
-                           const btCollisionObjectWrapper* w1, int, int) {
-    const btCollisionObject* a = w0->getCollisionObject();
-    const btCollisionObject* b = w1->getCollisionObject();
-    const bool ra = isEngineFrictionBody(a), rb = isEngineFrictionBody(b);
-    if (ra && rb) cp.m_combinedFriction = btMin(a->getFriction(), b->getFriction());
-    else if (ra) cp.m_combinedFriction = a->getFriction();
-    else if (rb) cp.m_combinedFriction = b->getFriction();
-    return true;
-}
 
 // Fixed restitution of AF bodies (af-format §3.4; the engine applies it above 2 units/s only).
 constexpr btScalar kRestitution = btScalar(0.4);
@@ -141,20 +126,68 @@ class Ragdoll::Action : public btActionInterface {
     bool m_havePrevious = false;
 };
 
-bool installEngineContactFriction() {
-    if (gContactAddedCallback == &engineContactFriction) return true;
-    if (gContactAddedCallback != nullptr) return false;
-    gContactAddedCallback = &engineContactFriction;
-    return true;
-}
-
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
-    : m_asset(std::move(asset)), m_world(world), m_spawn(options.entityTransform), m_action(std::make_unique<Action>(*this, options.comeToRest)) {
+    : m_asset(std::move(asset)), m_world(world), m_method(options.method),
+      m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
+      m_action(std::make_unique<Action>(*this, options.comeToRest)) {
     addBodies(options);
-    addConstraints(options.constraintIterations);
+    addConstraints();
     filterPairs();
     m_world.addAction(m_action.get());
     if (options.startAtRest) putToRest();
+}
+
+Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world, const SpawnOptions& options)
+    : Ragdoll(std::move(asset), static_cast<btDynamicsWorld&>(world.world()), options) {
+    m_manager = &world;
+    world.attach(*this);
+}
+
+bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
+
+std::vector<figure::BodyState> Ragdoll::bodyStates() const {
+    std::vector<figure::BodyState> out;
+    out.reserve(m_bodies.size());
+    for (const auto& b : m_bodies)
+        out.push_back({toEigen(b->getCenterOfMassTransform()), toEigen(b->getLinearVelocity()),
+                       toEigen(b->getAngularVelocity())});
+    return out;
+}
+
+int Ragdoll::awakeBodyCount() const {
+    int n = 0;
+    for (const auto& b : m_bodies) n += b->isActive() ? 1 : 0;
+    return n;
+}
+
+Ragdoll::JointError Ragdoll::jointError(int i) const {
+    const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
+    JointError e;
+    if (c.type == ConstraintType::Spring) return e;
+    const auto [a, b] = constraintFramesWorld(i);
+    const btVector3 d = a.getOrigin() - b.getOrigin();
+    e.anchorM = d.length();
+    if (c.type == ConstraintType::Slider) { // free along the axis: only the perpendicular part counts
+        const btVector3 axis = b.getBasis().getColumn(0);
+        e.anchorM = (d - axis * d.dot(axis)).length();
+    }
+    const btMatrix3x3 body1 = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform().getBasis();
+    const btMatrix3x3 body2 = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform().getBasis()
+                                           : m_spawn.getBasis();
+    LimitRow rows[2];
+    int n = 0;
+    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit))
+        n = hingeRangeRow(a.getBasis(), b.getBasis(), static_cast<btScalar>(h->lowerRad),
+                          static_cast<btScalar>(h->upperRad), 0, rows[0]);
+    else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
+        n = directionLimitRows(body1 * toBt(cone->shaftInBody1), body2 * basisWithX(toBt(cone->axisInBody2)),
+                               LimitShape::Cone, static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
+    else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
+        n = directionLimitRows(body1 * toBt(p->shaftInBody1), body2 * toBt(p->basisInBody2), LimitShape::Pyramid,
+                               static_cast<btScalar>(p->halfAngle1Rad), static_cast<btScalar>(p->halfAngle2Rad), 0,
+                               rows);
+    for (int k = 0; k < n; ++k) e.limitExcessRad = std::max(e.limitExcessRad, static_cast<double>(rows[k].excess));
+    return e;
 }
 
 std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
@@ -164,8 +197,9 @@ std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
     return out;
 }
 
-void Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
-    for (std::size_t i = 0; i < m_bodies.size() && i < states.size(); ++i) {
+bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
+    if (states.size() != m_bodies.size()) return false;
+    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
         btRigidBody& b = *m_bodies[i];
         const btTransform t = toBt(states[i].pose);
         b.setCenterOfMassTransform(t);
@@ -178,6 +212,7 @@ void Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
                                                                                  m_world.getDispatcher());
     }
     wake();
+    return true;
 }
 
 bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint) {
@@ -206,6 +241,7 @@ void Ragdoll::putToRest() {
 void Ragdoll::wake() { m_action->wake(); }
 
 Ragdoll::~Ragdoll() {
+    if (m_manager) m_manager->detach(*this);
     m_world.removeAction(m_action.get());
     for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
     for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
@@ -224,7 +260,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
         auto body = std::make_unique<btRigidBody>(info);
         body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
-        if (options.continuousCollision) {
+        if (m_method.ccd == CcdPolicy::FastBodies) {
             // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
             // fast thin limb cannot pass into or through the ground between two steps.
             const btScalar r = static_cast<btScalar>(m_asset->innerRadius(static_cast<int>(i)));
@@ -261,8 +297,10 @@ std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const 
     return {a, b};
 }
 
-void Ragdoll::addConstraints(int iterations) {
+void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
+    const int iterations = m_method.jointIterations;
+    const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
     const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
     for (const FigureConstraint& c : f.constraints) {
         btRigidBody& a = *m_bodies[static_cast<std::size_t>(c.body1)];
@@ -294,10 +332,17 @@ void Ragdoll::addConstraints(int iterations) {
                 const btMatrix3x3 frameAWorld = shortestArc(axisW, shaftW) * (bWorld.getBasis() * frameBRot);
                 const btTransform frameA(aWorld.getBasis().transpose() * frameAWorld, fa.getOrigin());
                 const btTransform frameB(frameBRot, fb.getOrigin());
-                auto ct = std::make_unique<btConeTwistConstraint>(a, b, frameA, frameB);
                 const btScalar h = static_cast<btScalar>(cone->halfAngleRad);
-                ct->setLimit(h, h, btScalar(-1), btScalar(1), DirectionLimitConstraint::kErrorReduction, btScalar(1));
-                main = std::move(ct);
+                if (policy.speculative) {
+                    // Our own cone row (speculative); the anchor alone is a point-to-point.
+                    main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+                    limit = std::make_unique<DirectionLimitConstraint>(a, b, shaftA, frameBRot, LimitShape::Cone, h, 0,
+                                                                       policy);
+                } else {
+                    auto ct = std::make_unique<btConeTwistConstraint>(a, b, frameA, frameB);
+                    ct->setLimit(h, h, btScalar(-1), btScalar(1), policy.errorReduction, btScalar(1));
+                    main = std::move(ct);
+                }
             } else {
                 main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
             }
@@ -315,9 +360,11 @@ void Ragdoll::addConstraints(int iterations) {
         }
         case ConstraintType::Hinge: {
             auto h = std::make_unique<btHingeConstraint>(a, b, fa, fb, false);
-            if (const auto* range = std::get_if<figure::HingeRange>(&c.limit))
-                h->setLimit(static_cast<btScalar>(range->lowerRad), static_cast<btScalar>(range->upperRad), 1,
-                            DirectionLimitConstraint::kErrorReduction, 1);
+            if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
+                const btScalar lo = static_cast<btScalar>(range->lowerRad), hi = static_cast<btScalar>(range->upperRad);
+                if (policy.speculative) limit = std::make_unique<HingeRangeConstraint>(a, b, fa, fb, lo, hi, policy);
+                else h->setLimit(lo, hi, 1, policy.errorReduction, 1);
+            }
             main = std::move(h);
             frictionRows = 1;
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
@@ -351,13 +398,13 @@ void Ragdoll::addConstraints(int iterations) {
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1), b2Rot * toBt(p->basisInBody2),
                                                                    DirectionLimitConstraint::Shape::Pyramid,
                                                                    static_cast<btScalar>(p->halfAngle1Rad),
-                                                                   static_cast<btScalar>(p->halfAngle2Rad));
+                                                                   static_cast<btScalar>(p->halfAngle2Rad), policy);
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
             if (cone && c.type == ConstraintType::Universal)
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
                                                                    basisWithX(b2Rot * toBt(cone->axisInBody2)),
                                                                    DirectionLimitConstraint::Shape::Cone,
-                                                                   static_cast<btScalar>(cone->halfAngleRad), 0);
+                                                                   static_cast<btScalar>(cone->halfAngleRad), 0, policy);
         }
 
         m_main.push_back(main.get());

@@ -6,8 +6,10 @@
 #include <sstream>
 
 #include "Commands.h"
+#include "MethodOptions.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Drop.h"
+#include "afb/sim/Report.h"
 #include "afb/text/Files.h"
 
 namespace afb::cli {
@@ -53,28 +55,6 @@ std::string stateHash(const sim::DropResult& r) {
     return hex(h);
 }
 
-sim::DropOptions optionsFrom(const nlohmann::json& j) {
-    sim::DropOptions o;
-    o.heightM = j.value("height_m", o.heightM);
-    o.count = j.value("count", o.count);
-    o.seconds = j.value("seconds", o.seconds);
-    o.hz = j.value("hz", o.hz);
-    o.substeps = j.value("substeps", o.substeps);
-    o.iterations = j.value("iterations", o.iterations);
-    o.constraintIterations = j.value("joint_iterations", o.constraintIterations);
-    o.sleeping = j.value("sleeping", o.sleeping);
-    if (j.contains("seed") && !j["seed"].is_null()) o.seed = j["seed"].get<std::uint32_t>();
-    return o;
-}
-
-nlohmann::json optionsJson(const sim::DropOptions& o) {
-    return {{"height_m", o.heightM},   {"count", o.count},
-            {"seconds", o.seconds},    {"hz", o.hz},
-            {"substeps", o.substeps},  {"iterations", o.iterations},
-            {"joint_iterations", o.constraintIterations}, {"sleeping", o.sleeping},
-            {"seed", o.seed ? nlohmann::json(*o.seed) : nlohmann::json(nullptr)}};
-}
-
 struct Run {
     std::optional<decl::ResolvedEntity> resolved;
     std::optional<sim::DropResult> result;
@@ -111,6 +91,7 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
         std::string entity;
         sim::DropOptions drop;
         std::optional<std::uint32_t> seed;
+        std::shared_ptr<MethodOptions> method = std::make_shared<MethodOptions>();
         double positionM = 0.02, angleDeg = 3.0;
     };
     auto rec = std::make_shared<Record>();
@@ -120,13 +101,20 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
     record->add_option("--out", rec->out, "Golden file to write (JSON)")->required();
     record->add_option("--height", rec->drop.heightM, "Spawn height, m")->capture_default_str();
     record->add_option("--seconds", rec->drop.seconds, "Simulated time, s")->capture_default_str();
-    record->add_option("--hz", rec->drop.hz, "Step rate")->capture_default_str();
-    record->add_option("--substeps", rec->drop.substeps, "Substeps per step")->capture_default_str();
-    record->add_option("--iterations", rec->drop.iterations, "Solver iterations")->capture_default_str();
+    record->add_option("--hz", rec->drop.hz, "Frame rate")->capture_default_str();
+    addMethodOptions(record, rec->method);
     record->add_option("--seed", rec->seed, "Random initial orientation from this seed");
     record->add_option("--position-tolerance", rec->positionM, "Per-joint position tolerance, m")->capture_default_str();
     record->add_option("--angle-tolerance", rec->angleDeg, "Per-joint angle tolerance, degrees")->capture_default_str();
     record->callback([rec, &exitCode] {
+        std::string error;
+        const auto method = resolveMethod(*rec->method, error);
+        if (!method) {
+            std::cerr << "afb golden record: " << error << "\n";
+            exitCode = 1;
+            return;
+        }
+        rec->drop.method = *method;
         rec->drop.seed = rec->seed;
         text::Diagnostics diags;
         const Run run = runScenario(rec->base, rec->entity, rec->drop, diags);
@@ -136,16 +124,11 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
             return;
         }
         const std::filesystem::path goldenDir = std::filesystem::absolute(rec->out).parent_path();
-        nlohmann::json pose = nlohmann::json::array();
-        for (const sim::JointPose& j : run.result->finalPose)
-            pose.push_back({{"joint", j.name},
-                            {"position", {j.position[0], j.position[1], j.position[2]}},
-                            {"quaternion", {j.quaternion[0], j.quaternion[1], j.quaternion[2], j.quaternion[3]}}});
         const nlohmann::json g = {
             {"entity", rec->entity},
             {"base", std::filesystem::relative(std::filesystem::absolute(rec->base), goldenDir).generic_string()},
             {"inputs", inputHashes(*run.resolved, std::filesystem::absolute(rec->base))},
-            {"options", optionsJson(rec->drop)},
+            {"options", sim::dropOptionsJson(rec->drop)},
             {"bullet", sim::bulletVersion()},
             {"precision", sim::bulletPrecision()},
             {"tolerance", {{"position_m", rec->positionM}, {"angle_deg", rec->angleDeg}}},
@@ -153,7 +136,7 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
             {"state_hash", stateHash(*run.result)},
             {"entity_transform", {{"position", {run.result->entity[0], run.result->entity[1], run.result->entity[2]}},
                         {"quaternion", {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}}}},
-            {"pose", pose}};
+            {"pose", sim::poseJson(run.result->finalPose)}};
         std::ofstream(rec->out) << g.dump(2) << "\n";
         std::printf("recorded %s -> %s (%zu joints, state %s)\n", rec->entity.c_str(), rec->out.string().c_str(),
                     run.result->finalPose.size(), stateHash(*run.result).c_str());
@@ -196,7 +179,13 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
                 exitCode = 1;
                 continue;
             }
-            const Run run = runScenario(base, entity, optionsFrom(g["options"]), diags);
+            sim::DropOptions options;
+            if (const std::string err = sim::dropOptionsFromJson(g["options"], options); !err.empty()) {
+                std::cerr << file.string() << ": error: " << err << "\n";
+                exitCode = 1;
+                continue;
+            }
+            const Run run = runScenario(base, entity, options, diags);
             printDiagnostics(diags);
             if (!run.result) {
                 exitCode = 1;

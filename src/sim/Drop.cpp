@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "afb/bullet/Convert.h"
-#include "afb/bullet/Ragdoll.h"
 #include "afb/pose/SkeletonDriver.h"
+#include "afb/sim/Scene.h"
 
 namespace afb::sim {
 namespace {
@@ -20,42 +20,6 @@ namespace {
 using bullet::Ragdoll;
 using bullet::RagdollAsset;
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kExplodeSpeedMps = 100.0;
-constexpr double kExplodeAnchorM = 0.1;
-
-double wrap(double a) { return std::remainder(a, 2 * kPi); }
-
-// How far constraint `i` of `r` is violated now: anchor separation (m) and limit excess (rad).
-std::pair<double, double> constraintError(const Ragdoll& r, int i) {
-    const figure::FigureConstraint& c = r.figure().constraints[static_cast<std::size_t>(i)];
-    if (c.type == decl::ConstraintType::Spring) return {0, 0};
-    const auto [a, b] = r.constraintFramesWorld(i);
-    double anchor = (a.getOrigin() - b.getOrigin()).length();
-    if (c.type == decl::ConstraintType::Slider) { // free along the axis: only the perpendicular part counts
-        const btVector3 axis = b.getBasis().getColumn(0);
-        const btVector3 d = a.getOrigin() - b.getOrigin();
-        anchor = (d - axis * d.dot(axis)).length();
-    }
-    double excess = 0;
-    const btMatrix3x3 body1 = r.body(c.body1).getCenterOfMassTransform().getBasis();
-    const btMatrix3x3 body2 = c.body2 >= 0 ? r.body(c.body2).getCenterOfMassTransform().getBasis()
-                                           : r.spawnTransform().getBasis();
-    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
-        const btMatrix3x3 rel = b.getBasis().transpose() * a.getBasis();
-        const double phi = std::atan2(rel[1][0], rel[0][0]);
-        const double centre = 0.5 * (h->lowerRad + h->upperRad), half = 0.5 * (h->upperRad - h->lowerRad);
-        excess = std::max(0.0, std::abs(wrap(phi - centre)) - half);
-    } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-        const btVector3 s = body1 * bullet::toBt(cone->shaftInBody1), x = body2 * bullet::toBt(cone->axisInBody2);
-        excess = std::max(0.0, std::acos(std::clamp(static_cast<double>(s.dot(x)), -1.0, 1.0)) - cone->halfAngleRad);
-    } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-        const btVector3 s = body1 * bullet::toBt(p->shaftInBody1);
-        const btMatrix3x3 basis = body2 * bullet::toBt(p->basisInBody2);
-        const double sf = s.dot(basis.getColumn(0)), sl = s.dot(basis.getColumn(1)), su = s.dot(basis.getColumn(2));
-        excess = std::max({0.0, std::abs(std::atan2(sl, sf)) - p->halfAngle1Rad, std::abs(std::atan2(su, sf)) - p->halfAngle2Rad});
-    }
-    return {anchor, excess};
-}
 
 // Model-space bounds of a figure's bodies at the load pose, for spacing and spawn height.
 void figureBounds(const figure::Figure& f, const btMatrix3x3& rotation, btVector3& lo, btVector3& hi) {
@@ -72,55 +36,63 @@ void figureBounds(const figure::Figure& f, const btMatrix3x3& rotation, btVector
 struct Partial {
     DropResult r;
     double stepSeconds = 0;
+    double worstAnchor = -1, worstLimit = -1; // for the names of the worst joints
     std::vector<double> restTimes; // per instance, −1 if never
-    bool haveFirst = false;
     std::vector<figure::Transform> firstBodies;
 };
 
-Partial runWorld(const figure::Figure& f, const std::shared_ptr<const RagdollAsset>& asset, const DropOptions& o,
+// Kinetic + potential energy of a ragdoll, J, from its body states and the figure's mass properties.
+double energy(const Ragdoll& d, double g) {
+    double e = 0;
+    const std::vector<figure::BodyState> states = d.bodyStates();
+    for (std::size_t i = 0; i < states.size(); ++i) {
+        const figure::FigureBody& body = d.figure().bodies[i];
+        const figure::BodyState& s = states[i];
+        const Eigen::Vector3d wBody = s.pose.rotation.transpose() * s.angularVelocity;
+        e += 0.5 * body.massKg * s.linearVelocity.squaredNorm() +
+             0.5 * wBody.dot(body.inertiaKgM2.cwiseProduct(wBody)) + body.massKg * g * s.pose.position.z();
+    }
+    return e;
+}
+
+// "figure/body" of a collision object in the scene, "ground", or "other".
+std::string objectName(Scene& scene, const btCollisionObject* o) {
+    if (o == scene.ground()) return "ground";
+    for (const auto& d : scene.ragdolls())
+        for (int i = 0; i < d->bodyCount(); ++i)
+            if (&d->body(i) == o) return d->figure().bodies[static_cast<std::size_t>(i)].name;
+    return "other";
+}
+
+std::string contactName(Scene& scene, const ContactDepth& c) {
+    return objectName(scene, c.a) + " / " + objectName(scene, c.b);
+}
+
+Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOptions& o,
                  const std::vector<btTransform>& spawns, bool holdsFirst, int steps) {
     Partial out;
-    btDefaultCollisionConfiguration config;
-    btCollisionDispatcher dispatcher(&config);
-    btDbvtBroadphase broadphase;
-    btSequentialImpulseConstraintSolver solver;
-    btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
-    const double g = f.units.gravityMps2;
-    world.setGravity(btVector3(0, 0, btScalar(-g)));
-    world.getSolverInfo().m_numIterations = o.iterations;
-    btStaticPlaneShape groundShape(btVector3(0, 0, 1), 0);
-    btRigidBody ground(0, nullptr, &groundShape);
-    ground.setFriction(1);
-    world.addRigidBody(&ground);
-
-    std::vector<std::unique_ptr<Ragdoll>> dolls;
+    const double g = asset->figure().units.gravityMps2;
+    Scene scene(o.method, SceneSettings{g, true, 1.0});
     for (const btTransform& t : spawns) {
         bullet::SpawnOptions so;
         so.entityTransform = t;
-        so.constraintIterations = o.constraintIterations;
         so.comeToRest = o.sleeping;
         so.startAtRest = o.startAtRest;
-        dolls.push_back(std::make_unique<Ragdoll>(asset, world, so));
+        scene.spawn(asset, so);
     }
+    const auto& dolls = scene.ragdolls();
     out.restTimes.assign(dolls.size(), -1);
 
-    auto energy = [&] {
+    auto totalEnergy = [&] {
         double e = 0;
-        for (const auto& d : dolls)
-            for (int i = 0; i < d->bodyCount(); ++i) {
-                const btRigidBody& b = d->body(i);
-                const double m = 1.0 / b.getInvMass();
-                const btVector3 w = b.getAngularVelocity();
-                const btVector3 iw = b.getInvInertiaTensorWorld().inverse() * w;
-                e += 0.5 * m * b.getLinearVelocity().length2() + 0.5 * w.dot(iw) + m * g * b.getCenterOfMassPosition().z();
-            }
+        for (const auto& d : dolls) e += energy(*d, g);
         return e;
     };
-    const double e0 = energy();
-    const btScalar dt = btScalar(1.0 / o.hz), subDt = btScalar(1.0 / (o.hz * o.substeps));
+    const double e0 = totalEnergy();
+    const int lastSecondFrom = steps - static_cast<int>(std::lround(o.hz));
     for (int step = 0; step < steps; ++step) {
         const auto t0 = std::chrono::steady_clock::now();
-        world.stepSimulation(dt, o.substeps, subDt);
+        scene.step(1.0 / o.hz);
         out.stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const double now = (step + 1) / o.hz;
         ++out.r.steps;
@@ -128,23 +100,29 @@ Partial runWorld(const figure::Figure& f, const std::shared_ptr<const RagdollAss
         bool allRest = true;
         for (std::size_t k = 0; k < dolls.size(); ++k) {
             Ragdoll& d = *dolls[k];
-            for (int i = 0; i < d.bodyCount(); ++i) {
-                const btRigidBody& b = d.body(i);
-                if (b.isActive()) ++out.r.awakeBodySteps;
-                const double speed = b.getLinearVelocity().length();
-                const btVector3 p = b.getCenterOfMassPosition();
-                if (!std::isfinite(speed) || !std::isfinite(static_cast<double>(p.x() + p.y() + p.z())) ||
-                    speed > kExplodeSpeedMps) {
+            out.r.awakeBodySteps += d.awakeBodyCount();
+            for (const figure::BodyState& b : d.bodyStates()) {
+                const double speed = b.linearVelocity.norm();
+                if (!std::isfinite(speed) || !b.pose.position.allFinite() || speed > kExplodeSpeedMps) {
                     if (!out.r.exploded) out.r.explodedAtS = now;
                     out.r.exploded = true;
                 }
                 if (std::isfinite(speed)) out.r.maxSpeedMps = std::max(out.r.maxSpeedMps, speed);
             }
             for (int c = 0; c < static_cast<int>(d.figure().constraints.size()); ++c) {
-                const auto [anchor, excess] = constraintError(d, c);
-                out.r.maxAnchorErrorM = std::max(out.r.maxAnchorErrorM, anchor);
-                out.r.maxLimitViolationDeg = std::max(out.r.maxLimitViolationDeg, excess * 180.0 / kPi);
-                if (anchor > kExplodeAnchorM && !out.r.exploded) {
+                const Ragdoll::JointError e = d.jointError(c);
+                const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
+                if (e.anchorM > out.worstAnchor) {
+                    out.worstAnchor = e.anchorM;
+                    if (e.anchorM > 0) out.r.worstAnchorJoint = name;
+                }
+                if (e.limitExcessRad > out.worstLimit) {
+                    out.worstLimit = e.limitExcessRad;
+                    if (e.limitExcessRad > 0) out.r.worstLimitJoint = name;
+                }
+                out.r.maxAnchorErrorM = std::max(out.r.maxAnchorErrorM, e.anchorM);
+                out.r.maxLimitViolationDeg = std::max(out.r.maxLimitViolationDeg, e.limitExcessRad * 180.0 / kPi);
+                if (e.anchorM > kExplodeAnchorM && !out.r.exploded) {
                     out.r.exploded = true;
                     out.r.explodedAtS = now;
                 }
@@ -152,20 +130,15 @@ Partial runWorld(const figure::Figure& f, const std::shared_ptr<const RagdollAss
             if (d.atRest() && out.restTimes[k] < 0) out.restTimes[k] = now;
             allRest = allRest && d.atRest();
         }
-        for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
-            const btPersistentManifold* man = dispatcher.getManifoldByIndexInternal(m);
-            for (int c = 0; c < man->getNumContacts(); ++c)
-                out.r.maxPenetrationM = std::max(out.r.maxPenetrationM, -static_cast<double>(man->getContactPoint(c).getDistance()));
-        }
-        out.r.maxEnergyGainJ = std::max(out.r.maxEnergyGainJ, energy() - e0);
+        const ContactDepth deepest = scene.deepestContact();
+        const double depth = deepest.depthM;
+        if (depth > out.r.maxPenetrationM) out.r.worstContact = contactName(scene, deepest);
+        out.r.maxPenetrationM = std::max(out.r.maxPenetrationM, depth);
+        if (step >= lastSecondFrom) out.r.restPenetrationM = std::max(out.r.restPenetrationM, depth);
+        out.r.maxEnergyGainJ = std::max(out.r.maxEnergyGainJ, totalEnergy() - e0);
         if (o.stopAtRest && allRest) break;
     }
-    if (holdsFirst && !dolls.empty()) {
-        out.haveFirst = true;
-        out.firstBodies = dolls[0]->bodyTransforms();
-    }
-    dolls.clear();
-    world.removeRigidBody(&ground);
+    if (holdsFirst && !dolls.empty()) out.firstBodies = dolls[0]->bodyTransforms();
     return out;
 }
 
@@ -179,7 +152,6 @@ std::string bulletVersion() {
 const char* bulletPrecision() { return sizeof(btScalar) == sizeof(double) ? "double" : "float"; }
 
 DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
-    bullet::installEngineContactFriction(); // the drop tool owns its process: the engine's contact friction
     const auto asset = RagdollAsset::create(figure);
     const int count = std::max(1, o.count);
     const int worlds = std::clamp(o.worlds, 1, count);
@@ -214,8 +186,8 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     {
         std::vector<std::thread> threads;
         for (int w = 1; w < worlds; ++w)
-            threads.emplace_back([&, w] { parts[static_cast<std::size_t>(w)] = runWorld(figure, asset, o, perWorld[static_cast<std::size_t>(w)], false, steps); });
-        parts[0] = runWorld(figure, asset, o, perWorld[0], true, steps);
+            threads.emplace_back([&, w] { parts[static_cast<std::size_t>(w)] = runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps); });
+        parts[0] = runWorld(asset, o, perWorld[0], true, steps);
         for (std::thread& t : threads) t.join();
     }
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -223,9 +195,11 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     DropResult r = parts[0].r;
     r.figure = figure.name;
     r.precision = bulletPrecision();
+    r.method = o.method;
     r.bodies = static_cast<int>(figure.bodies.size()) * count;
     r.constraints = static_cast<int>(figure.constraints.size()) * count;
     double stepSeconds = parts[0].stepSeconds, lastRest = 0;
+    double worstAnchor = parts[0].worstAnchor, worstLimit = parts[0].worstLimit;
     bool allRested = true;
     for (std::size_t w = 0; w < parts.size(); ++w) {
         const DropResult& p = parts[w].r;
@@ -233,7 +207,17 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
             r.awakeBodySteps += p.awakeBodySteps;
             r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, p.maxAnchorErrorM);
             r.maxLimitViolationDeg = std::max(r.maxLimitViolationDeg, p.maxLimitViolationDeg);
+            if (p.maxPenetrationM > r.maxPenetrationM) r.worstContact = p.worstContact;
             r.maxPenetrationM = std::max(r.maxPenetrationM, p.maxPenetrationM);
+            r.restPenetrationM = std::max(r.restPenetrationM, p.restPenetrationM);
+            if (parts[w].worstAnchor > worstAnchor) {
+                worstAnchor = parts[w].worstAnchor;
+                r.worstAnchorJoint = p.worstAnchorJoint;
+            }
+            if (parts[w].worstLimit > worstLimit) {
+                worstLimit = parts[w].worstLimit;
+                r.worstLimitJoint = p.worstLimitJoint;
+            }
             r.maxEnergyGainJ = std::max(r.maxEnergyGainJ, p.maxEnergyGainJ);
             r.maxSpeedMps = std::max(r.maxSpeedMps, p.maxSpeedMps);
             if (p.exploded && (!r.exploded || *p.explodedAtS < *r.explodedAtS)) r.explodedAtS = p.explodedAtS;
@@ -251,8 +235,8 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * worlds / r.bodies : 0;
 
     // The first instance's pose, in its own model space (metres).
-    const std::vector<figure::Transform> bodies = parts[0].firstBodies;
-    const pose::SkeletonPose pose = pose::driveSkeleton(figure, bodies);
+    r.finalBodies = parts[0].firstBodies;
+    const pose::SkeletonPose pose = pose::driveSkeleton(figure, r.finalBodies);
     const Eigen::Quaterniond qe(pose.entity.rotation);
     const double entity[7] = {pose.entity.position.x(), pose.entity.position.y(), pose.entity.position.z(),
                               qe.w(), qe.x(), qe.y(), qe.z()};

@@ -9,6 +9,7 @@
 #include "FigureFixture.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/sim/Scene.h"
 
 namespace {
 
@@ -19,25 +20,19 @@ constexpr double kUnit = 0.0254;
 
 // A world with gravity `g` holding one ragdoll of `figure` at the identity entity transform.
 struct Scene {
-    btDefaultCollisionConfiguration config;
-    btCollisionDispatcher dispatcher{&config};
-    btDbvtBroadphase broadphase;
-    btSequentialImpulseConstraintSolver solver;
-    btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
-    std::unique_ptr<Ragdoll> ragdoll;
+    afb::sim::Scene scene{afb::bullet::Method{}, {.gravityMps2 = 0, .ground = false}};
+    Ragdoll* ragdoll = nullptr;
 
     Scene(const afb::figure::Figure& figure, const btVector3& g) {
-        world.setGravity(g);
+        scene.world().setGravity(g);
         // Rest rules off: these tests load limits, they do not wait for the figure to sleep.
-        ragdoll = std::make_unique<Ragdoll>(RagdollAsset::create(figure), world, afb::bullet::SpawnOptions{.comeToRest = false});
+        ragdoll = &scene.spawn(RagdollAsset::create(figure), afb::bullet::SpawnOptions{.comeToRest = false});
         for (int i = 0; i < ragdoll->bodyCount(); ++i) ragdoll->body(i).setActivationState(DISABLE_DEACTIVATION);
     }
-    ~Scene() { ragdoll.reset(); }
     void run(double seconds, const std::function<void()>& beforeStep = {}) {
-        const btScalar dt = btScalar(1.0 / 60.0);
         for (int i = 0, n = static_cast<int>(std::lround(seconds * 60)); i < n; ++i) {
             if (beforeStep) beforeStep();
-            world.stepSimulation(dt, 1, dt);
+            scene.step(1.0 / 60.0);
         }
     }
     btMatrix3x3 rotation(int body) const { return ragdoll->body(body).getCenterOfMassTransform().getBasis(); }

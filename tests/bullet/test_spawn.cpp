@@ -8,6 +8,7 @@
 #include "afb/decl/Library.h"
 #include "afb/figure/Collision.h"
 #include "afb/figure/Load.h"
+#include "afb/sim/Scene.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -31,14 +32,10 @@ using figure::Figure;
 
 namespace {
 
-// A zero-gravity world with Bullet's default parts, as a game would set one up.
+// A zero-gravity world without ground, from the one scene the tools use.
 struct World {
-    btDefaultCollisionConfiguration config;
-    btCollisionDispatcher dispatcher{&config};
-    btDbvtBroadphase broadphase;
-    btSequentialImpulseConstraintSolver solver;
-    btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
-    World() { world.setGravity(btVector3(0, 0, 0)); }
+    sim::Scene scene{bullet::Method{}, {.gravityMps2 = 0, .ground = false}};
+    btDiscreteDynamicsWorld& world = scene.world();
 };
 
 struct NamedFigure {

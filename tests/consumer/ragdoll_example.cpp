@@ -1,12 +1,10 @@
 // A minimal afbullet program, using only the installed public headers:
 //   1. open a content folder (af/, def/, models/) and build the figure of an entity,
-//   2. create a Bullet world with a ground plane,
+//   2. create a Bullet world with a ground plane, and install a method's world-level knobs into it,
 //   3. spawn two ragdolls of that figure (they share collision shapes),
 //   4. step 2 seconds at 60 Hz and print the md5 joint positions of the first ragdoll.
 // Usage: ragdoll_example [CONTENT_DIR] [ENTITY]   (defaults: . chain)
-#include <afb/bullet/Ragdoll.h>
-#include <afb/figure/Load.h>
-#include <afb/pose/SkeletonDriver.h>
+#include <afb/afb.h>
 
 #include <cstdio>
 #include <iostream>
@@ -35,15 +33,21 @@ int main(int argc, char** argv) {
     btStaticPlaneShape groundShape(btVector3(0, 0, 1), 0);
     btRigidBody ground(0, nullptr, &groundShape);
     world.addRigidBody(&ground);
+    // The method: its world-level knobs (solver, substeps, position pass, the engine's contact friction) live
+    // as long as this guard; create it before the ragdolls, destroy it after them.
+    const afb::bullet::Method method = *afb::bullet::methodPreset("default");
+    afb::bullet::RagdollWorld ragdollWorld(world, method);
 
     // 3. Two ragdolls from one shared asset; the second one 1 m to the side.
     const auto asset = afb::bullet::RagdollAsset::create(figure);
-    afb::bullet::SpawnOptions second;
+    afb::bullet::SpawnOptions where;
+    where.method = method; // its per-ragdoll knobs
+    afb::bullet::SpawnOptions second = where;
     second.entityTransform.setOrigin(btVector3(0, 1, 0));
-    afb::bullet::Ragdoll first(asset, world), other(asset, world, second);
+    afb::bullet::Ragdoll first(asset, ragdollWorld, where), other(asset, ragdollWorld, second);
 
-    // 4. Step, then read the skeleton back.
-    for (int i = 0; i < 120; ++i) world.stepSimulation(btScalar(1.0 / 60.0), 1, btScalar(1.0 / 60.0));
+    // 4. Step (the method's substeps inside), then read the skeleton back.
+    for (int i = 0; i < 120; ++i) ragdollWorld.step(1.0 / 60.0);
     const afb::pose::SkeletonPose pose = afb::pose::driveSkeleton(figure, first.bodyTransforms());
     const auto joints = pose.world();
     std::printf("%s: %d bodies, %d joints after 2 s (world, metres)\n", figure.name.c_str(), first.bodyCount(),

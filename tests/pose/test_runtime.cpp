@@ -10,6 +10,7 @@
 #include "afb/bullet/Ragdoll.h"
 #include "afb/figure/Load.h"
 #include "afb/pose/SkeletonDriver.h"
+#include "afb/sim/Scene.h"
 
 namespace {
 
@@ -17,28 +18,16 @@ using afb::bullet::Ragdoll;
 using afb::bullet::RagdollAsset;
 using afb::figure::Transform;
 
+// The tools' one scene (default method), with or without a ground plane.
 struct World {
-    btDefaultCollisionConfiguration config;
-    btCollisionDispatcher dispatcher{&config};
-    btDbvtBroadphase broadphase;
-    btSequentialImpulseConstraintSolver solver;
-    btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
-    std::unique_ptr<btCollisionShape> groundShape;
-    std::unique_ptr<btRigidBody> ground;
+    afb::sim::Scene scene;
+    btDiscreteDynamicsWorld& world = scene.world();
+    btRigidBody* ground = scene.ground();
 
-    explicit World(double gravity = 9.81) { world.setGravity(btVector3(0, 0, btScalar(-gravity))); }
-    ~World() {
-        if (ground) world.removeRigidBody(ground.get());
-    }
-    void addGround() {
-        groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
-        ground = std::make_unique<btRigidBody>(0, nullptr, groundShape.get());
-        ground->setFriction(1);
-        world.addRigidBody(ground.get());
-    }
+    explicit World(double gravity = 9.81, bool withGround = false)
+        : scene(afb::bullet::Method{}, {.gravityMps2 = gravity, .ground = withGround}) {}
     void step(int steps) {
-        const btScalar dt = btScalar(1.0 / 60.0);
-        for (int i = 0; i < steps; ++i) world.stepSimulation(dt, 1, dt);
+        for (int i = 0; i < steps; ++i) scene.step(1.0 / 60.0);
     }
 };
 
@@ -165,7 +154,7 @@ TEST_CASE("velocity inheritance reproduces the motion's velocities", "[runtime]"
     const auto states = afb::figure::inheritVelocities(before, after, dt);
     World w(0);
     Ragdoll ragdoll(RagdollAsset::create(f), w.world);
-    ragdoll.setBodyStates(states);
+    REQUIRE(ragdoll.setBodyStates(states));
     for (int i = 0; i < ragdoll.bodyCount(); ++i) {
         const Eigen::Vector3d p = afb::bullet::toEigen(ragdoll.body(i).getCenterOfMassPosition());
         const Eigen::Vector3d expected = v + omega.cross(p);
@@ -181,8 +170,7 @@ TEST_CASE("drop: zsec figures settle on the ground by their rules, stay connecte
     for (const char* entity : {"monster_zsec_pistol", "monster_zsec_shotgun", "monster_zsec_machinegun"}) {
         const afb::figure::LoadedFigure loaded = load(corpus / "doom3-kroom3/base", entity);
         const afb::figure::Figure& f = loaded.figure;
-        World w;
-        w.addGround();
+        World w(9.81, true);
         btTransform spawn = btTransform::getIdentity();
         spawn.setOrigin(btVector3(0, 0, 1.0f)); // a 1 m drop
         Ragdoll ragdoll(RagdollAsset::create(f), w.world, {.entityTransform = spawn});
@@ -253,7 +241,6 @@ TEST_CASE("spawn and remove cycles leave the world as it was", "[runtime]") {
 
 TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies, own value against the world",
           "[runtime]") {
-    REQUIRE(afb::bullet::installEngineContactFriction());
     // Two loose boxes of one figure, the upper one resting on the lower one, the lower one on the ground.
     const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"low", 0, 0, 0, 2}, {"high", 1, 0, 0, 6}};
     const auto built = afb::test::buildTestFigure(
@@ -265,15 +252,16 @@ TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies
         joints);
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
-    World w;
-    w.addGround();
+    World w(9.81, true);
     w.ground->setFriction(btScalar(0.7));
     Ragdoll ragdoll(RagdollAsset::create(*built.figure), w.world, {.comeToRest = false});
+    REQUIRE(ragdoll.engineContactFriction()); // the scene's RagdollWorld holds the guard
     w.step(30);
     int checked = 0;
-    for (int m = 0; m < w.dispatcher.getNumManifolds(); ++m) {
-        const btPersistentManifold* man = w.dispatcher.getManifoldByIndexInternal(m);
-        const bool withGround = man->getBody0() == w.ground.get() || man->getBody1() == w.ground.get();
+    btDispatcher& dispatcher = *w.world.getDispatcher();
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+        const btPersistentManifold* man = dispatcher.getManifoldByIndexInternal(m);
+        const bool withGround = man->getBody0() == w.ground || man->getBody1() == w.ground;
         for (int c = 0; c < man->getNumContacts(); ++c) {
             const double f = man->getContactPoint(c).m_combinedFriction;
             // Ground: low's own 0.5 (Bullet's product would be 0.35); boxes: min(0.5, 0.3) (product 0.15).
@@ -285,12 +273,10 @@ TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies
 }
 
 TEST_CASE("drop: every bundled figure settles by its own rules, without exploding", "[runtime]") {
-    afb::bullet::installEngineContactFriction();
     for (const char* entity : {"humanoid", "props", "buggy", "lamp", "chain"}) {
         const afb::figure::LoadedFigure loaded = load(afb::test::sourceDir(), entity);
         const afb::figure::Figure& f = loaded.figure;
-        World w;
-        w.addGround();
+        World w(9.81, true);
         btTransform spawn = btTransform::getIdentity();
         spawn.setOrigin(btVector3(0, 0, 0.5f));
         Ragdoll ragdoll(RagdollAsset::create(f), w.world, {.entityTransform = spawn});

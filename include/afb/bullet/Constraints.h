@@ -4,40 +4,85 @@
 
 namespace afb::bullet {
 
+/// One row of a one-sided angular limit: the excess grows at `axisWorld · (ωA − ωB)`.
+struct LimitRow {
+    btVector3 axisWorld;
+    btScalar excess; ///< radians past the limit (> 0), or minus the gap still left before it (≤ 0, speculative)
+};
+
+/// Shapes of a direction limit (af-format §4.3).
+enum class LimitShape { Cone, Pyramid };
+
+/// The rows of a direction limit on `shaftWorld` (unit) against `basisWorld` (columns f, l, u; a cone's axis is
+/// f): a cone (angle from f ≤ half1) or a true pyramid (planar angles in span(f, l) ≤ half1 and in span(f, u) ≤
+/// half2, exact atan2 angles so the corners are a pyramid's). Rows whose excess is above −`marginRad` are
+/// returned (0: only violated ones). Returns the row count (≤ 2).
+int directionLimitRows(const btVector3& shaftWorld, const btMatrix3x3& basisWorld, LimitShape shape,
+                       btScalar half1Rad, btScalar half2Rad, btScalar marginRad, LimitRow rows[2]);
+
+/// The row of a hinge range: φ (the rotation of frame A relative to frame B about B's Z axis, af-format §4.5)
+/// within [lowerRad, upperRad]. Rows whose excess is above −`marginRad` are returned. Returns 0 or 1.
+int hingeRangeRow(const btMatrix3x3& frameAWorld, const btMatrix3x3& frameBWorld, btScalar lowerRad,
+                  btScalar upperRad, btScalar marginRad, LimitRow& row);
+
+/// How limit rows correct: error reduction per step past the limit, and speculation before it.
+struct LimitRowPolicy {
+    btScalar errorReduction = btScalar(0.3); ///< the engine's LIMIT_ERROR_REDUCTION
+    /// Rows exist before the limit is reached and allow only the remaining gap to close in one step.
+    bool speculative = false;
+};
+
 /// A one-sided limit on a direction (the "shaft", fixed in body A) against an axis or basis fixed in body B
-/// (or the world): a cone (angle from the axis ≤ halfAngle1) or a true pyramid (the shaft's planar angles in the
-/// basis' (f, l) and (f, u) planes ≤ halfAngle1 and halfAngle2; af-format §4.3). Angular rows only, active only
-/// while violated, exact angle errors so the pyramid's corners are a pyramid's. Twist stays free.
+/// (or the world): a cone or a true pyramid (directionLimitRows). Angular rows only; twist stays free.
 class DirectionLimitConstraint : public btTypedConstraint {
   public:
-    enum class Shape { Cone, Pyramid };
+    using Shape = LimitShape;
 
     /// `shaftInA`: unit, in A's frame. `basisInB`: columns f, l, u (cone: column 0 is the axis), in B's frame.
     DirectionLimitConstraint(btRigidBody& a, btRigidBody& b, const btVector3& shaftInA, const btMatrix3x3& basisInB,
-                             Shape shape, btScalar halfAngle1Rad, btScalar halfAngle2Rad);
+                             Shape shape, btScalar halfAngle1Rad, btScalar halfAngle2Rad, LimitRowPolicy policy = {});
 
     void getInfo1(btConstraintInfo1* info) override;
     void getInfo2(btConstraintInfo2* info) override;
     void setParam(int, btScalar, int) override {}
     btScalar getParam(int, int) const override { return 0; }
 
-    /// Error reduction per step of the limit rows (the engine's LIMIT_ERROR_REDUCTION).
+    /// The engine's LIMIT_ERROR_REDUCTION, the default of LimitRowPolicy::errorReduction.
     static constexpr btScalar kErrorReduction = btScalar(0.3);
 
     /// Current violation, radians (0 when within the limit): the largest of the limit's angle excesses.
     btScalar violation() const;
 
   private:
-    struct Row {
-        btVector3 axisWorld; ///< the excess grows at axisWorld · (ωA − ωB)
-        btScalar excess;     ///< how far past the limit, radians (> 0)
-    };
-    int activeRows(Row rows[2]) const;
+    int rows(LimitRow out[2], btScalar margin) const;
 
     btVector3 m_shaftInA;
     btMatrix3x3 m_basisInB;
     Shape m_shape;
     btScalar m_half1, m_half2;
+    LimitRowPolicy m_policy;
+    btScalar m_lastStep = btScalar(1.0 / 60.0); ///< the last step's length, for the speculative margin
+    btScalar m_margin = 0;                      ///< the margin getInfo1 counted rows with (getInfo2 agrees)
+};
+
+/// A hinge range as its own one-sided row (used for speculative limits; btHingeConstraint's own limit row
+/// appears only after the overshoot): φ of frame A relative to frame B about B's Z within [lower, upper].
+class HingeRangeConstraint : public btTypedConstraint {
+  public:
+    HingeRangeConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA, const btTransform& frameInB,
+                         btScalar lowerRad, btScalar upperRad, LimitRowPolicy policy);
+    void getInfo1(btConstraintInfo1* info) override;
+    void getInfo2(btConstraintInfo2* info) override;
+    void setParam(int, btScalar, int) override {}
+    btScalar getParam(int, int) const override { return 0; }
+
+  private:
+    int row(LimitRow& out, btScalar margin) const;
+    btMatrix3x3 m_frameInA, m_frameInB;
+    btScalar m_lower, m_upper;
+    LimitRowPolicy m_policy;
+    btScalar m_lastStep = btScalar(1.0 / 60.0); ///< the last step's length, for the speculative margin
+    btScalar m_margin = 0;                      ///< the margin getInfo1 counted rows with (getInfo2 agrees)
 };
 
 /// Joint friction (af-format §4.8): rows that resist the relative angular velocity on the free axes, each bounded

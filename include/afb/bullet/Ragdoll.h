@@ -6,10 +6,13 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/figure/Placement.h"
 
 namespace afb::bullet {
+
+class RagdollWorld;
 
 /// Where and how a ragdoll enters a world.
 struct SpawnOptions {
@@ -20,34 +23,31 @@ struct SpawnOptions {
     /// Bullet collision mask of every body; bodies attached to the world by a collision-disabling constraint
     /// also drop btBroadphaseProxy::StaticFilter (the engine lets them pass through world geometry, §6.2).
     int collisionMask = btBroadphaseProxy::AllFilter;
-    /// Solver iterations for the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
-    /// for the world's count. Contacts keep the world's count. 20 holds loaded limits to within 1° at 60 Hz where
-    /// the common 10 leaves 1–2° (measured in tests/bullet/test_constraints.cpp).
-    int constraintIterations = 20;
+    /// How the ragdoll is simulated. Its per-ragdoll knobs (joint iterations, limit rows, continuous collision)
+    /// apply here; its world-level knobs (substeps, solver, position pass) are the world's: see RagdollWorld.
+    Method method = {};
     /// Spawn at rest until touched (entityDef `"nodrop" "1"`, or the seed page's `"sleep" "1"`).
     bool startAtRest = false;
     /// Apply the figure's rest rules (§6.1) and put it to sleep when they say so (the engine's comeToRest).
     /// Off: the ragdoll never rests by itself (putToRest still works).
     bool comeToRest = true;
-    /// Continuous collision for bodies that move more than their inner radius in one step (Bullet's CCD).
-    bool continuousCollision = true;
     /// The engine's contact friction (§4.8): min of the two bodies' values between ragdoll bodies, the ragdoll
-    /// body's own value against anything else, instead of Bullet's product. Needs Bullet's one global contact
-    /// callback: see installEngineContactFriction(); without it this flag has no effect.
+    /// body's own value against anything else, instead of Bullet's product. Bullet has one process-wide contact
+    /// callback for it: it is in force while an EngineContactFriction guard (every RagdollWorld holds one) lives;
+    /// Ragdoll::engineContactFriction() says whether it is.
     bool engineContactFriction = true;
 };
-
-/// Installs Bullet's global contact-added callback (gContactAddedCallback) with the engine's friction combination
-/// for ragdoll bodies spawned with `engineContactFriction`; other objects are left as Bullet combines them.
-/// Bullet has one such callback per process: returns false (and installs nothing) when another one is set.
-/// Idempotent; call it once at start-up if you want the engine's contact friction.
-bool installEngineContactFriction();
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
 class Ragdoll {
   public:
+    /// Spawns into a plain world: the method's per-ragdoll knobs apply, the world keeps its own settings and
+    /// there is no position pass.
     Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options = {});
+    /// Spawns into a world managed by `world` (its method's world-level knobs, position pass, contact friction);
+    /// `world` must outlive the ragdoll.
+    Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world, const SpawnOptions& options = {});
     ~Ragdoll();
     Ragdoll(const Ragdoll&) = delete;
     Ragdoll& operator=(const Ragdoll&) = delete;
@@ -57,16 +57,24 @@ class Ragdoll {
     /// The shared asset.
     const std::shared_ptr<const RagdollAsset>& asset() const { return m_asset; }
     /// The world the ragdoll lives in.
-    btDynamicsWorld& world() const { return m_world; }
+    btDynamicsWorld& world() { return m_world; }
+    const btDynamicsWorld& world() const { return m_world; }
+    /// The method it was spawned with.
+    const Method& method() const { return m_method; }
+    /// Whether the engine's contact friction is in force for its bodies (SpawnOptions::engineContactFriction and
+    /// a live EngineContactFriction guard).
+    bool engineContactFriction() const;
     /// The entity transform it was spawned with (model space to world).
     const btTransform& spawnTransform() const { return m_spawn; }
 
     /// Number of rigid bodies (one per figure body, same order).
     int bodyCount() const { return static_cast<int>(m_bodies.size()); }
     /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes).
-    btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
+    btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(i)]; }
+    const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
     /// The main Bullet constraint of figure constraint `i`.
-    btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
+    btTypedConstraint* constraint(int i) { return m_main[static_cast<std::size_t>(i)]; }
+    const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths).
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
 
@@ -74,11 +82,23 @@ class Ragdoll {
     /// space now; at spawn the two coincide.
     std::pair<btTransform, btTransform> constraintFramesWorld(int i) const;
 
+    /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
+    struct JointError {
+        double anchorM = 0;        ///< separation of the two anchor copies (sliders: off the axis only); 0 for springs
+        double limitExcessRad = 0; ///< how far a cone, pyramid or hinge limit is exceeded; 0 inside or without one
+    };
+    JointError jointError(int i) const;
+
     /// World transforms of every body (body frames: centre of mass, principal axes), metres.
     std::vector<figure::Transform> bodyTransforms() const;
-    /// Places every body (one state per body) and sets its velocities, e.g. from an animation
-    /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll.
-    void setBodyStates(std::span<const figure::BodyState> states);
+    /// World transforms and velocities of every body.
+    std::vector<figure::BodyState> bodyStates() const;
+    /// Bodies Bullet is simulating now (not asleep).
+    int awakeBodyCount() const;
+    /// Places every body (one state per body, in body order) and sets its velocities, e.g. from an animation
+    /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll. Returns false and changes
+    /// nothing when the number of states is not bodyCount().
+    [[nodiscard]] bool setBodyStates(std::span<const figure::BodyState> states);
 
     /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints,
     /// §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine units,
@@ -99,13 +119,16 @@ class Ragdoll {
   private:
     class Action;
     void addBodies(const SpawnOptions& options);
-    void addConstraints(int iterations);
+    void addConstraints();
     void filterPairs();
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
 
     std::shared_ptr<const RagdollAsset> m_asset;
     btDynamicsWorld& m_world;
+    RagdollWorld* m_manager = nullptr; ///< the RagdollWorld it was spawned through, if any
+    Method m_method;
+    bool m_engineFriction = false;
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world

@@ -1,16 +1,18 @@
 #pragma once
 // Drop tests: figures dropped onto a ground plane, measured for speed, accuracy and stability while they fall.
-// Shared by `afb drop`, tests and benchmarks (ARCHITECTURE.md: src/sim).
+// Shared by `afb drop`, `afb golden`, tests and benchmarks (ARCHITECTURE.md: src/sim).
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "afb/bullet/Method.h"
 #include "afb/figure/Figure.h"
 
 namespace afb::sim {
 
-/// How a drop is run. Times in seconds, lengths in metres.
+/// A drop scenario: where and how long. How the figure is stepped is the method. Times in seconds, lengths in
+/// metres.
 struct DropOptions {
     double heightM = 1.0;          ///< lowest point of each figure above the ground at spawn
     int count = 1;                 ///< instances of the figure, on a grid in one world (or split over worlds)
@@ -18,10 +20,8 @@ struct DropOptions {
     std::optional<std::uint32_t> seed; ///< random initial orientations (yaw and a tilt); none: yaw = 37°·i
     double seconds = 10.0;         ///< simulated time (ignored when steps is set)
     std::optional<int> steps;      ///< exact number of steps; 0 reports the spawn pose
-    double hz = 60.0;              ///< fixed step rate
-    int substeps = 1;              ///< Bullet substeps per step (each of 1/(hz·substeps) s)
-    int iterations = 10;           ///< solver iterations of the world
-    int constraintIterations = 20; ///< per-constraint iterations of the figure's joints (SpawnOptions)
+    double hz = 60.0;              ///< fixed frame rate (each frame is the method's substeps)
+    bullet::Method method = {};    ///< how the figures are simulated
     bool sleeping = true;          ///< the figure's rest rules put it to sleep
     bool stopAtRest = false;       ///< end the run as soon as every instance is at rest
     bool startAtRest = false;      ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
@@ -38,20 +38,30 @@ struct JointPose {
 struct DropResult {
     std::string figure;
     std::string precision; ///< "float" or "double" (btScalar of the Bullet build)
+    bullet::Method method;
     int bodies = 0, constraints = 0, steps = 0;
     double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
     long long awakeBodySteps = 0;
     double maxAnchorErrorM = 0, maxLimitViolationDeg = 0, maxPenetrationM = 0, maxEnergyGainJ = 0;
+    double restPenetrationM = 0; ///< deepest contact over the last simulated second
+    std::string worstAnchorJoint; ///< the constraint with the largest anchor error (empty when none)
+    std::string worstLimitJoint;  ///< the constraint with the largest limit violation (empty when none)
+    std::string worstContact;     ///< the pair of the deepest contact, "body / ground" or "body / body"
     double maxSpeedMps = 0;
     bool exploded = false;
     std::optional<double> explodedAtS;
     std::optional<double> settleTimeS;
     double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz
     std::vector<JointPose> finalPose;         ///< first instance, model space
+    std::vector<figure::Transform> finalBodies; ///< first instance's body frames, world, metres
 };
 
 /// Runs one drop of `figure`. Deterministic for a given build, options and input.
 DropResult runDrop(const figure::Figure& figure, const DropOptions& options);
+
+/// Thresholds of `exploded`: a speed over kExplodeSpeedMps, an anchor error over kExplodeAnchorM, or NaN.
+inline constexpr double kExplodeSpeedMps = 100.0;
+inline constexpr double kExplodeAnchorM = 0.1;
 
 /// The Bullet version this library was built against, e.g. "3.24", and "float"/"double".
 std::string bulletVersion();

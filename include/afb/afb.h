@@ -1,0 +1,23 @@
+#pragma once
+// afbullet for games: everything a game needs to load Doom 3 articulated figures and run them as Bullet
+// ragdolls in its own world. Link afbullet::afbullet (float Bullet) or afbullet::afbullet_double.
+//
+//   text::Diagnostics            every message as file:line:col: error|warning: text
+//   decl::Library                a content folder (af/, def/, models/) and entity resolution
+//   figure::loadEntityFigure     an entity's figure in SI units, with the engine's meaning and findings
+//   figure::bodiesFromJoints     body placements from an md5 pose (start a ragdoll from an animation)
+//   bullet::Method               how a ragdoll is simulated (presets fast, default, accurate, exact)
+//   bullet::RagdollWorld         a method's world-level knobs installed into your btDiscreteDynamicsWorld
+//   bullet::RagdollAsset         a figure's shared collision shapes
+//   bullet::Ragdoll              one live ragdoll in your world
+//   pose::driveSkeleton          md5 joint transforms from the bodies, by the figure's mod rules
+#include "afb/bullet/Method.h"
+#include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollAsset.h"
+#include "afb/bullet/RagdollWorld.h"
+#include "afb/decl/Library.h"
+#include "afb/figure/Figure.h"
+#include "afb/figure/Load.h"
+#include "afb/figure/Placement.h"
+#include "afb/pose/SkeletonDriver.h"
+#include "afb/text/Diagnostics.h"

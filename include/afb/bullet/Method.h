@@ -1,0 +1,109 @@
+#pragma once
+// How a ragdoll is simulated: one plain value holding every knob that trades speed against accuracy, chosen per
+// world (the world-level knobs) and per ragdoll (the rest), and recorded with every result (drop reports,
+// goldens, charts). Named presets go from fast to exact; the README gives their measured numbers.
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace afb::bullet {
+
+/// Which representation simulates the figure.
+enum class Backend {
+    Rigid, ///< one btRigidBody per body, joined by btTypedConstraints (maximal coordinates)
+};
+
+/// Which bodies Bullet sweeps continuously between steps.
+enum class CcdPolicy {
+    Off,        ///< discrete collision only
+    FastBodies, ///< a body moving more than its inner radius in a step is swept as a sphere of that radius
+};
+
+/// Every knob of how a figure is stepped. A plain, comparable value: copy it, change a field, pass it on.
+struct Method {
+    /// The preset the value started from ("default", "fast", …), for reports; overrides do not rename it.
+    std::string name = "default";
+    Backend backend = Backend::Rigid;
+
+    // --- world-level knobs (applied to the world by RagdollWorld; shared by everything in that world) -----------
+    /// Substeps per frame: each frame of dt is stepped as `substeps` steps of dt / substeps.
+    int substeps = 1;
+    /// Sequential-impulse iterations of the world's solver (contacts, and joints without their own count).
+    int iterations = 10;
+    /// Bullet's split impulse: contact penetration is recovered by a separate position-only impulse that adds
+    /// no velocity (no bounce out of the ground); off, penetration is recovered by Baumgarte velocity.
+    bool splitImpulse = true;
+    /// Error reduction per step of contact penetration (btContactSolverInfo::m_erp2).
+    double contactErp = 0.2;
+    /// Error reduction per step of Bullet's joint rows (btContactSolverInfo::m_erp): anchor separation and
+    /// locked axes of point-to-point, hinge, cone-twist, slider and fixed constraints.
+    double jointErp = 0.2;
+    /// Warm starting: each contact and joint row starts from a fraction of its last impulse.
+    bool warmStarting = true;
+    /// That fraction (btContactSolverInfo::m_warmstartingFactor).
+    double warmStartingFactor = 0.85;
+    /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
+    /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
+    /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world.
+    int positionIterations = 0;
+    /// Contact manifolds filled at first touch: Bullet's convex–plane and convex–convex algorithms find one
+    /// point per step by default, so a box landing flat is held at one corner and tips into the ground by up
+    /// to a step's travel; on, they add perturbed points until the manifold has three. Sets the world's
+    /// btDefaultCollisionConfiguration (for every convex body in it, the game's too).
+    bool multipointContacts = false;
+    /// Speculative contacts: Bullet keeps a ragdoll body's contacts from as far as the body can travel in one
+    /// substep, so the solver stops an approaching body at the surface instead of finding it inside one step
+    /// later (Bullet treats contacts at a positive distance as speculative). Runs where a RagdollWorld manages
+    /// the world; the engine's restitution then applies only to touching contacts.
+    bool speculativeContacts = false;
+
+    // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
+    /// Solver iterations of the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
+    /// for the world's count. Contacts keep the world's count.
+    int jointIterations = 20;
+    /// Error reduction per step of limit rows (cone, pyramid, hinge range; the engine's LIMIT_ERROR_REDUCTION).
+    double limitErp = 0.3;
+    /// Speculative limits: a limit row exists before the limit is reached and lets the joint close only the gap
+    /// that remains in this step (Box2D v3's joint limits), instead of a row that appears after the overshoot.
+    /// Cone and hinge limits then use afbullet's own rows instead of btConeTwist's and btHinge's.
+    bool speculativeLimits = false;
+    /// Continuous collision policy.
+    CcdPolicy ccd = CcdPolicy::FastBodies;
+
+    friend bool operator==(const Method&, const Method&) = default;
+};
+
+/// The named presets, fast to exact: "fast", "default", "accurate", "exact".
+std::span<const std::string_view> methodPresetNames();
+/// The preset called `name`, or nullopt for an unknown name.
+std::optional<Method> methodPreset(std::string_view name);
+
+/// One knob of a Method, by the name the CLI, JSON reports and goldens use ("substeps", "joint-iterations", …).
+struct MethodKnob {
+    std::string_view name; ///< kebab-case: the CLI flag without "--", and the JSON key
+    std::string_view help; ///< one line for --help
+    /// The field: an integer, a real, a flag, or an enum spelled as text.
+    std::variant<int Method::*, double Method::*, bool Method::*, CcdPolicy Method::*, Backend Method::*> field;
+};
+
+/// Every knob of Method, in a fixed order (the one table that names them; the preset name is not a knob).
+std::span<const MethodKnob> methodKnobs();
+
+/// The knob's value in `m`, as text: integers and reals as numbers, flags "on"/"off", enums by name.
+std::string knobValue(const Method& m, const MethodKnob& knob);
+/// Sets the knob from text (as knobValue writes it; flags also true/false/1/0). Returns an error message, or
+/// an empty string on success; `m` is unchanged on error. Reals and integers must be finite and in range.
+std::string setKnob(Method& m, const MethodKnob& knob, std::string_view value);
+/// The knob called `name`, or nullptr.
+const MethodKnob* findKnob(std::string_view name);
+
+/// "default (substeps 1, iterations 10, …)": the preset name and every knob, for reports.
+std::string describe(const Method& m);
+
+std::string_view toString(Backend b);
+std::string_view toString(CcdPolicy c);
+
+} // namespace afb::bullet

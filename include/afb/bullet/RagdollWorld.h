@@ -1,0 +1,76 @@
+#pragma once
+// The world-level half of a Method, installed into a caller-owned btDiscreteDynamicsWorld for as long as this
+// guard lives: solver settings, the engine's contact friction and the position pass over every ragdoll that
+// was spawned through it. Create it before the ragdolls and destroy it after them.
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include <btBulletDynamicsCommon.h>
+
+#include "afb/bullet/Method.h"
+
+namespace afb::bullet {
+
+class Ragdoll;
+
+/// Keeps Bullet's one process-wide contact-added callback set to the engine's friction combination (af-format
+/// §4.8) while at least one guard lives; ragdoll bodies spawned with SpawnOptions::engineContactFriction then
+/// combine friction as the engine does. Thread-safe; if another callback is installed, active() is false and
+/// Bullet's product rule stays in force.
+class EngineContactFriction {
+  public:
+    EngineContactFriction();
+    ~EngineContactFriction();
+    EngineContactFriction(const EngineContactFriction&) = delete;
+    EngineContactFriction& operator=(const EngineContactFriction&) = delete;
+    /// True when the engine's rule is in force.
+    bool active() const { return m_active; }
+    /// True when any guard has the engine's rule in force now (what a ragdoll reports).
+    static bool installed();
+
+  private:
+    bool m_active = false;
+};
+
+/// A caller's world with a Method's world-level knobs (substeps, iterations, split impulse, ERPs, warm starting,
+/// position iterations) and the engine's contact friction. Ragdolls spawned with `Ragdoll(asset, ragdollWorld,
+/// options)` get the position pass. Not copyable; one world, one thread.
+class RagdollWorld {
+  public:
+    RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method);
+    ~RagdollWorld();
+    RagdollWorld(const RagdollWorld&) = delete;
+    RagdollWorld& operator=(const RagdollWorld&) = delete;
+
+    btDiscreteDynamicsWorld& world() { return m_world; }
+    const btDiscreteDynamicsWorld& world() const { return m_world; }
+    /// The method whose world-level knobs are in force.
+    const Method& method() const { return m_method; }
+
+    /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep).
+    void step(double dtSeconds);
+
+    /// Whether the engine's contact friction is in force (another contact callback may own Bullet's hook).
+    bool engineContactFriction() const { return m_friction.active(); }
+
+    /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
+    void attach(Ragdoll& ragdoll);
+    void detach(Ragdoll& ragdoll);
+
+  private:
+    class PositionAction;
+    void rebuildOwners();
+
+    btDiscreteDynamicsWorld& m_world;
+    Method m_method;
+    EngineContactFriction m_friction;
+    std::vector<Ragdoll*> m_ragdolls; ///< in spawn order
+    std::vector<std::pair<const btCollisionObject*, int>> m_owners; ///< body → index into m_ragdolls, sorted
+    std::unique_ptr<PositionAction> m_action;
+};
+
+/// Sets a world's solver to a method's world-level knobs (what RagdollWorld does at construction).
+void applyWorldKnobs(btDynamicsWorld& world, const Method& method);
+
+} // namespace afb::bullet

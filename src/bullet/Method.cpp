@@ -1,0 +1,160 @@
+// Methods: the knob table and the named presets (README "Methods" has the measurements behind each preset).
+#include "afb/bullet/Method.h"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+namespace afb::bullet {
+namespace {
+
+constexpr std::array<std::string_view, 4> kPresetNames = {"fast", "default", "accurate", "exact"};
+
+const std::array<MethodKnob, 15> kKnobs = {{
+    {"backend", "Simulation backend: rigid (btRigidBody + constraints)", &Method::backend},
+    {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
+    {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
+    {"joint-iterations", "Solver iterations of the figure's joints and limits (0: the world's)", &Method::jointIterations},
+    {"split-impulse", "Bullet's split impulse for contact penetration (on/off)", &Method::splitImpulse},
+    {"contact-erp", "Error reduction per step of contact penetration", &Method::contactErp},
+    {"joint-erp", "Error reduction per step of Bullet's joint rows", &Method::jointErp},
+    {"limit-erp", "Error reduction per step of limit rows", &Method::limitErp},
+    {"warm-starting", "Warm starting of contact and joint rows (on/off)", &Method::warmStarting},
+    {"warm-starting-factor", "Fraction of the last impulse a row starts from", &Method::warmStartingFactor},
+    {"position-iterations", "Position sweeps after each substep over joints, limits and contacts (0: off)",
+     &Method::positionIterations},
+    {"multipoint-contacts", "Full contact manifolds at first touch (on/off)", &Method::multipointContacts},
+    {"speculative-contacts", "Contacts kept from as far as a body travels in a substep (on/off)",
+     &Method::speculativeContacts},
+    {"speculative-limits", "Limit rows active before the limit is reached (on/off)", &Method::speculativeLimits},
+    {"ccd", "Continuous collision: off or fast-bodies", &Method::ccd},
+}};
+
+// Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
+struct Range {
+    double lo, hi;
+};
+Range rangeOf(std::string_view knob) {
+    if (knob == "substeps") return {1, 64};
+    if (knob == "iterations") return {1, 1000};
+    if (knob == "joint-iterations") return {0, 1000};
+    if (knob == "position-iterations") return {0, 100};
+    return {0, 1}; // ERPs and the warm-starting factor
+}
+
+std::string formatReal(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+} // namespace
+
+std::string_view toString(Backend b) {
+    switch (b) {
+    case Backend::Rigid: return "rigid";
+    }
+    return "rigid";
+}
+
+std::string_view toString(CcdPolicy c) { return c == CcdPolicy::Off ? "off" : "fast-bodies"; }
+
+std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
+
+std::optional<Method> methodPreset(std::string_view name) {
+    Method m;
+    m.name = std::string(name);
+    if (name == "fast") {
+        m.jointIterations = 0;
+        return m;
+    }
+    if (name == "default") return m;
+    if (name == "accurate") {
+        m.substeps = 2;
+        return m;
+    }
+    if (name == "exact") {
+        m.substeps = 4;
+        return m;
+    }
+    return std::nullopt;
+}
+
+std::span<const MethodKnob> methodKnobs() { return kKnobs; }
+
+const MethodKnob* findKnob(std::string_view name) {
+    for (const MethodKnob& k : kKnobs)
+        if (k.name == name) return &k;
+    return nullptr;
+}
+
+std::string knobValue(const Method& m, const MethodKnob& knob) {
+    struct Visitor {
+        const Method& m;
+        std::string operator()(int Method::*f) const { return std::to_string(m.*f); }
+        std::string operator()(double Method::*f) const { return formatReal(m.*f); }
+        std::string operator()(bool Method::*f) const { return m.*f ? "on" : "off"; }
+        std::string operator()(CcdPolicy Method::*f) const { return std::string(toString(m.*f)); }
+        std::string operator()(Backend Method::*f) const { return std::string(toString(m.*f)); }
+    };
+    return std::visit(Visitor{m}, knob.field);
+}
+
+std::string setKnob(Method& m, const MethodKnob& knob, std::string_view value) {
+    const std::string what = "--" + std::string(knob.name) + " " + std::string(value) + ": ";
+    struct Visitor {
+        Method& m;
+        std::string_view value;
+        const std::string& what;
+        Range range;
+        std::string operator()(int Method::*f) const {
+            int v = 0;
+            const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+            if (ec != std::errc() || end != value.data() + value.size()) return what + "not an integer";
+            if (v < range.lo || v > range.hi)
+                return what + "out of range [" + formatReal(range.lo) + ", " + formatReal(range.hi) + "]";
+            m.*f = v;
+            return {};
+        }
+        std::string operator()(double Method::*f) const {
+            const std::string text(value);
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v)) return what + "not a number";
+            if (v < range.lo || v > range.hi)
+                return what + "out of range [" + formatReal(range.lo) + ", " + formatReal(range.hi) + "]";
+            m.*f = v;
+            return {};
+        }
+        std::string operator()(bool Method::*f) const {
+            if (value == "on" || value == "true" || value == "1") m.*f = true;
+            else if (value == "off" || value == "false" || value == "0") m.*f = false;
+            else return what + "expected on or off";
+            return {};
+        }
+        std::string operator()(CcdPolicy Method::*f) const {
+            if (value == "off") m.*f = CcdPolicy::Off;
+            else if (value == "fast-bodies") m.*f = CcdPolicy::FastBodies;
+            else return what + "expected off or fast-bodies";
+            return {};
+        }
+        std::string operator()(Backend Method::*f) const {
+            if (value != "rigid") return what + "expected rigid";
+            m.*f = Backend::Rigid;
+            return {};
+        }
+    };
+    return std::visit(Visitor{m, value, what, rangeOf(knob.name)}, knob.field);
+}
+
+std::string describe(const Method& m) {
+    std::string out = m.name + " (";
+    for (std::size_t i = 0; i < kKnobs.size(); ++i) {
+        if (i > 0) out += ", ";
+        out += std::string(kKnobs[i].name) + " " + knobValue(m, kKnobs[i]);
+    }
+    return out + ")";
+}
+
+} // namespace afb::bullet

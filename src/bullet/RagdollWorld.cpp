@@ -1,0 +1,195 @@
+// The world-level half of a method: solver settings, the engine's contact friction guard, the position pass.
+#include "afb/bullet/RagdollWorld.h"
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+
+#include "EngineFriction.h"
+#include "PositionPass.h"
+#include "afb/bullet/Ragdoll.h"
+
+namespace afb::bullet {
+namespace {
+
+bool isEngineFrictionBody(const btCollisionObject* o) {
+    return o->getUserIndex2() == kEngineFrictionMarker || o->getUserIndex2() == kSpeculativeFrictionMarker;
+}
+bool isSpeculativeBody(const btCollisionObject* o) { return o->getUserIndex2() == kSpeculativeFrictionMarker; }
+
+// af-format §4.8: min(f1, f2) between two ragdoll bodies, the ragdoll body's own value against anything else.
+bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int,
+                           const btCollisionObjectWrapper* w1, int, int) {
+    const btCollisionObject* a = w0->getCollisionObject();
+    const btCollisionObject* b = w1->getCollisionObject();
+    const bool ra = isEngineFrictionBody(a), rb = isEngineFrictionBody(b);
+    if (ra && rb) cp.m_combinedFriction = btMin(a->getFriction(), b->getFriction());
+    else if (ra) cp.m_combinedFriction = a->getFriction();
+    else if (rb) cp.m_combinedFriction = b->getFriction();
+    // A speculative contact (not touching yet) must not bounce: restitution is for the impact itself.
+    if ((isSpeculativeBody(a) || isSpeculativeBody(b)) && cp.getDistance() > 0) cp.m_combinedRestitution = 0;
+    return true;
+}
+
+// The farthest a speculative contact reaches, metres: beyond it, continuous collision takes over.
+constexpr double kMaxSpeculativeM = 0.5;
+
+// Guards of the process-wide callback: installed by the first guard that finds it free, removed by the last.
+std::mutex gFrictionMutex;
+int gFrictionGuards = 0;
+std::atomic<bool> gFrictionInstalled{false};
+
+} // namespace
+
+EngineContactFriction::EngineContactFriction() {
+    const std::lock_guard lock(gFrictionMutex);
+    if (gContactAddedCallback != nullptr && gContactAddedCallback != &engineContactFriction) return;
+    gContactAddedCallback = &engineContactFriction;
+    gFrictionInstalled = true;
+    ++gFrictionGuards;
+    m_active = true;
+}
+
+EngineContactFriction::~EngineContactFriction() {
+    if (!m_active) return;
+    const std::lock_guard lock(gFrictionMutex);
+    if (--gFrictionGuards == 0) {
+        if (gContactAddedCallback == &engineContactFriction) gContactAddedCallback = nullptr;
+        gFrictionInstalled = false;
+    }
+}
+
+bool EngineContactFriction::installed() { return gFrictionInstalled && gContactAddedCallback == &engineContactFriction; }
+
+void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
+    btContactSolverInfo& info = world.getSolverInfo();
+    info.m_numIterations = m.iterations;
+    info.m_splitImpulse = m.splitImpulse ? 1 : 0;
+    info.m_erp2 = static_cast<btScalar>(m.contactErp);
+    info.m_erp = static_cast<btScalar>(m.jointErp);
+    info.m_warmstartingFactor = static_cast<btScalar>(m.warmStartingFactor);
+    if (m.warmStarting) info.m_solverMode |= SOLVER_USE_WARMSTARTING;
+    else info.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
+    // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.
+    if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(world.getDispatcher()))
+        if (auto* config = dynamic_cast<btDefaultCollisionConfiguration*>(dispatcher->getCollisionConfiguration())) {
+            if (m.multipointContacts) {
+                config->setPlaneConvexMultipointIterations(3, 3);
+                config->setConvexConvexMultipointIterations(3, 3);
+            } else {
+                config->setPlaneConvexMultipointIterations(1, 0);
+                config->setConvexConvexMultipointIterations(0, 3);
+            }
+        }
+}
+
+// After each substep's integration (Bullet runs actions then), the position pass over every ragdoll.
+class RagdollWorld::PositionAction : public btActionInterface, public detail::MovableTest {
+  public:
+    explicit PositionAction(RagdollWorld& owner) : m_owner(owner) {}
+
+    bool movable(const btCollisionObject* o) const override { return owner(o) >= 0; }
+
+    void updateAction(btCollisionWorld* world, btScalar dt) override {
+        if (m_owner.m_ragdolls.empty()) return;
+        const int iterations = m_owner.m_method.positionIterations;
+        if (iterations > 0) positionPass(world, iterations);
+        if (m_owner.m_method.speculativeContacts) widenContacts(world, dt);
+    }
+
+    // Speculative contacts for the next substep: every manifold of a ragdoll body keeps (and finds) points up
+    // to the distance its bodies can close in one substep at their current speeds, plus Bullet's own threshold.
+    void widenContacts(btCollisionWorld* world, btScalar dt) {
+        btDispatcher* dispatcher = world->getDispatcher();
+        btPersistentManifold** manifolds = dispatcher->getInternalManifoldPointer();
+        for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
+            btPersistentManifold* m = manifolds[i];
+            const btScalar reach = reachOf(m->getBody0(), dt) + reachOf(m->getBody1(), dt);
+            if (reach <= 0) continue;
+            m->setContactBreakingThreshold(btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reach));
+        }
+    }
+    // How far a ragdoll body's surface can move in `dt` (0 for other objects): linear speed plus angular speed
+    // times the shape's bounding radius, with a 25 % allowance for the acceleration within the step.
+    btScalar reachOf(const btCollisionObject* o, btScalar dt) const {
+        if (owner(o) < 0) return 0;
+        const btRigidBody* b = btRigidBody::upcast(o);
+        if (b == nullptr) return 0;
+        btVector3 centre;
+        btScalar radius = 0;
+        o->getCollisionShape()->getBoundingSphere(centre, radius);
+        const btScalar speed = b->getLinearVelocity().length() + b->getAngularVelocity().length() * radius;
+        return btScalar(1.25) * speed * dt;
+    }
+
+    void positionPass(btCollisionWorld* world, int iterations) {
+        // Contacts per ragdoll, in the dispatcher's order: one pass over the manifolds for all ragdolls.
+        m_contacts.resize(m_owner.m_ragdolls.size());
+        for (auto& list : m_contacts) list.clear();
+        btDispatcher* dispatcher = world->getDispatcher();
+        btPersistentManifold** manifolds = dispatcher->getInternalManifoldPointer();
+        for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
+            btPersistentManifold* m = manifolds[i];
+            if (m->getNumContacts() == 0) continue;
+            const int r0 = owner(m->getBody0()), r1 = owner(m->getBody1());
+            if (r0 >= 0) m_contacts[static_cast<std::size_t>(r0)].push_back(m);
+            if (r1 >= 0 && r1 != r0) m_contacts[static_cast<std::size_t>(r1)].push_back(m);
+        }
+        for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
+            Ragdoll& r = *m_owner.m_ragdolls[k];
+            if (r.atRest()) continue;
+            for (int it = 0; it < iterations; ++it) detail::positionSweep(r, m_contacts[k], *this);
+        }
+    }
+    void debugDraw(btIDebugDraw*) override {}
+
+  private:
+    int owner(const btCollisionObject* o) const {
+        const auto& v = m_owner.m_owners;
+        const auto it = std::lower_bound(v.begin(), v.end(), o, [](const auto& e, const btCollisionObject* key) {
+            return std::less<const btCollisionObject*>()(e.first, key);
+        });
+        return it != v.end() && it->first == o ? it->second : -1;
+    }
+
+    RagdollWorld& m_owner;
+    std::vector<std::vector<btPersistentManifold*>> m_contacts;
+};
+
+RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
+    : m_world(world), m_method(method), m_action(std::make_unique<PositionAction>(*this)) {
+    applyWorldKnobs(m_world, m_method);
+    m_world.addAction(m_action.get());
+}
+
+RagdollWorld::~RagdollWorld() { m_world.removeAction(m_action.get()); }
+
+void RagdollWorld::step(double dtSeconds) {
+    const int substeps = std::max(1, m_method.substeps);
+    m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
+}
+
+void RagdollWorld::attach(Ragdoll& r) {
+    if (m_method.speculativeContacts)
+        for (int i = 0; i < r.bodyCount(); ++i)
+            if (r.body(i).getUserIndex2() == kEngineFrictionMarker) r.body(i).setUserIndex2(kSpeculativeFrictionMarker);
+    m_ragdolls.push_back(&r);
+    rebuildOwners();
+}
+
+void RagdollWorld::detach(Ragdoll& r) {
+    m_ragdolls.erase(std::remove(m_ragdolls.begin(), m_ragdolls.end(), &r), m_ragdolls.end());
+    rebuildOwners();
+}
+
+void RagdollWorld::rebuildOwners() {
+    m_owners.clear();
+    for (std::size_t k = 0; k < m_ragdolls.size(); ++k)
+        for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i)
+            m_owners.emplace_back(&m_ragdolls[k]->body(i), static_cast<int>(k));
+    std::sort(m_owners.begin(), m_owners.end(), [](const auto& x, const auto& y) {
+        return std::less<const btCollisionObject*>()(x.first, y.first);
+    });
+}
+
+} // namespace afb::bullet

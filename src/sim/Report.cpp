@@ -1,0 +1,183 @@
+// Drop and method serialisation: one table of result fields feeds the JSON, the CSV and the help text.
+#include "afb/sim/Report.h"
+
+#include <functional>
+#include <sstream>
+
+namespace afb::sim {
+namespace {
+
+using nlohmann::json;
+
+json optional(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+struct Field {
+    std::string_view name;
+    std::string_view help;
+    std::function<json(const DropResult&)> value;
+};
+
+const std::vector<Field>& fields() {
+    static const std::vector<Field> table = {
+        {"figure", "entity's figure name", [](const DropResult& r) { return json(r.figure); }},
+        {"precision", "Bullet build, float or double", [](const DropResult& r) { return json(r.precision); }},
+        {"method", "the method's preset name (its knobs follow in JSON as \"method\", in CSV as method.*)",
+         [](const DropResult& r) { return json(r.method.name); }},
+        {"bodies", "bodies over all instances", [](const DropResult& r) { return json(r.bodies); }},
+        {"constraints", "constraints over all instances", [](const DropResult& r) { return json(r.constraints); }},
+        {"steps", "frames stepped", [](const DropResult& r) { return json(r.steps); }},
+        {"wall_ms", "wall time of the whole run", [](const DropResult& r) { return json(r.wallMs); }},
+        {"us_per_step", "stepping only, the slowest world", [](const DropResult& r) { return json(r.usPerStep); }},
+        {"us_per_body_step", "us_per_step × worlds / bodies", [](const DropResult& r) { return json(r.usPerBodyStep); }},
+        {"awake_body_steps", "body-steps not asleep", [](const DropResult& r) { return json(r.awakeBodySteps); }},
+        {"max_anchor_error_m", "largest separation of a constraint's two anchor copies (sliders: off-axis only)",
+         [](const DropResult& r) { return json(r.maxAnchorErrorM); }},
+        {"worst_anchor_joint", "the constraint where it happened",
+         [](const DropResult& r) { return json(r.worstAnchorJoint); }},
+        {"max_limit_violation_deg", "largest excess over a cone, pyramid or hinge limit",
+         [](const DropResult& r) { return json(r.maxLimitViolationDeg); }},
+        {"worst_limit_joint", "the constraint where it happened",
+         [](const DropResult& r) { return json(r.worstLimitJoint); }},
+        {"max_penetration_m", "deepest contact (ground and between bodies)",
+         [](const DropResult& r) { return json(r.maxPenetrationM); }},
+        {"worst_contact", "the pair where it happened", [](const DropResult& r) { return json(r.worstContact); }},
+        {"rest_penetration_m", "deepest contact over the last simulated second",
+         [](const DropResult& r) { return json(r.restPenetrationM); }},
+        {"max_energy_gain_j", "kinetic + potential above the start", [](const DropResult& r) { return json(r.maxEnergyGainJ); }},
+        {"max_speed_mps", "fastest body", [](const DropResult& r) { return json(r.maxSpeedMps); }},
+        {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m", [](const DropResult& r) { return json(r.exploded); }},
+        {"exploded_at_s", "when it first exploded", [](const DropResult& r) { return optional(r.explodedAtS); }},
+        {"settle_time_s", "every instance at rest by its figure's rules, else null",
+         [](const DropResult& r) { return optional(r.settleTimeS); }},
+    };
+    return table;
+}
+
+std::string csvCell(const json& v) {
+    if (v.is_null()) return "";
+    if (v.is_boolean()) return v.get<bool>() ? "1" : "0";
+    if (v.is_string()) {
+        const std::string s = v.get<std::string>();
+        if (s.find_first_of(",\"\n") == std::string::npos) return s;
+        std::string q = "\"";
+        for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+        return q + "\"";
+    }
+    return v.dump();
+}
+
+} // namespace
+
+json methodJson(const bullet::Method& m) {
+    json j = {{"name", m.name}};
+    for (const bullet::MethodKnob& k : bullet::methodKnobs()) {
+        const std::string text = bullet::knobValue(m, k);
+        json value;
+        if (std::holds_alternative<int bullet::Method::*>(k.field)) value = m.*std::get<int bullet::Method::*>(k.field);
+        else if (std::holds_alternative<double bullet::Method::*>(k.field))
+            value = m.*std::get<double bullet::Method::*>(k.field);
+        else if (std::holds_alternative<bool bullet::Method::*>(k.field))
+            value = m.*std::get<bool bullet::Method::*>(k.field);
+        else value = text;
+        j[std::string(k.name)] = value;
+    }
+    return j;
+}
+
+std::string methodFromJson(const json& j, bullet::Method& out) {
+    if (!j.is_object()) return "method: not an object";
+    const std::string name = j.value("name", std::string("default"));
+    auto m = bullet::methodPreset(name);
+    if (!m) {
+        m = bullet::Method{};
+        m->name = name; // a recorded custom name: its knobs follow
+    }
+    for (const bullet::MethodKnob& k : bullet::methodKnobs()) {
+        if (!j.contains(k.name)) continue;
+        const json& v = j[std::string(k.name)];
+        std::string text;
+        if (v.is_boolean()) text = v.get<bool>() ? "on" : "off";
+        else if (v.is_number_integer()) text = std::to_string(v.get<long long>());
+        else if (v.is_number()) text = v.dump();
+        else if (v.is_string()) text = v.get<std::string>();
+        else return "method: " + std::string(k.name) + ": unexpected value " + v.dump();
+        if (std::string err = bullet::setKnob(*m, k, text); !err.empty()) return "method: " + err;
+    }
+    out = *m;
+    return {};
+}
+
+json dropOptionsJson(const DropOptions& o) {
+    return {{"height_m", o.heightM},
+            {"count", o.count},
+            {"seconds", o.seconds},
+            {"hz", o.hz},
+            {"sleeping", o.sleeping},
+            {"seed", o.seed ? json(*o.seed) : json(nullptr)},
+            {"method", methodJson(o.method)}};
+}
+
+std::string dropOptionsFromJson(const json& j, DropOptions& o) {
+    if (!j.is_object()) return "options: not an object";
+    try {
+        o.heightM = j.value("height_m", o.heightM);
+        o.count = j.value("count", o.count);
+        o.seconds = j.value("seconds", o.seconds);
+        o.hz = j.value("hz", o.hz);
+        o.sleeping = j.value("sleeping", o.sleeping);
+        if (j.contains("seed") && !j["seed"].is_null()) o.seed = j["seed"].get<std::uint32_t>();
+        if (j.contains("method")) return methodFromJson(j["method"], o.method);
+        // Recorded before methods: the knobs that existed then, on top of the default method.
+        o.method = *bullet::methodPreset("default");
+        o.method.substeps = j.value("substeps", o.method.substeps);
+        o.method.iterations = j.value("iterations", o.method.iterations);
+        o.method.jointIterations = j.value("joint_iterations", o.method.jointIterations);
+    } catch (const json::exception& e) {
+        return std::string("options: ") + e.what();
+    }
+    return {};
+}
+
+json poseJson(const std::vector<JointPose>& pose) {
+    json out = json::array();
+    for (const JointPose& j : pose)
+        out.push_back({{"joint", j.name},
+                       {"position", {j.position[0], j.position[1], j.position[2]}},
+                       {"quaternion", {j.quaternion[0], j.quaternion[1], j.quaternion[2], j.quaternion[3]}}});
+    return out;
+}
+
+json dropResultJson(const DropResult& r) {
+    json j = json::object();
+    for (const Field& f : fields()) j[std::string(f.name)] = f.value(r);
+    j["method"] = methodJson(r.method);
+    j["final_pose"] = {{"entity", {{"position", {r.entity[0], r.entity[1], r.entity[2]}},
+                                   {"quaternion", {r.entity[3], r.entity[4], r.entity[5], r.entity[6]}}}},
+                       {"joints", poseJson(r.finalPose)}};
+    return j;
+}
+
+std::string dropCsvHeader() {
+    std::string out;
+    for (const Field& f : fields()) out += (out.empty() ? "" : ",") + std::string(f.name);
+    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += ",method." + std::string(k.name);
+    return out;
+}
+
+std::string dropCsvRow(const DropResult& r) {
+    std::string out;
+    for (const Field& f : fields()) out += (out.empty() ? "" : ",") + csvCell(f.value(r));
+    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += "," + bullet::knobValue(r.method, k);
+    return out;
+}
+
+std::string dropFieldsHelp() {
+    std::ostringstream out;
+    out << "Fields (JSON and CSV):";
+    for (const Field& f : fields()) out << "\n  " << f.name << ": " << f.help;
+    out << "\n  final_pose (JSON only): first instance's entity transform and every md5 joint's model-space position "
+           "and w,x,y,z quaternion, metres.";
+    return out.str();
+}
+
+} // namespace afb::sim

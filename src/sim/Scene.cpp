@@ -1,0 +1,48 @@
+// The one scene (ARCHITECTURE.md: src/sim): Bullet's default collision parts, the sequential-impulse solver,
+// the method's world-level knobs through bullet::RagdollWorld.
+#include "afb/sim/Scene.h"
+
+namespace afb::sim {
+
+Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
+    : m_method(method), m_config(std::make_unique<btDefaultCollisionConfiguration>()),
+      m_dispatcher(std::make_unique<btCollisionDispatcher>(m_config.get())),
+      m_broadphase(std::make_unique<btDbvtBroadphase>()),
+      m_solver(std::make_unique<btSequentialImpulseConstraintSolver>()),
+      m_world(std::make_unique<btDiscreteDynamicsWorld>(m_dispatcher.get(), m_broadphase.get(), m_solver.get(),
+                                                        m_config.get())) {
+    m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));
+    if (settings.ground) {
+        m_groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
+        m_ground = std::make_unique<btRigidBody>(0, nullptr, m_groundShape.get());
+        m_ground->setFriction(static_cast<btScalar>(settings.groundFriction));
+        m_world->addRigidBody(m_ground.get());
+    }
+    m_ragdollWorld = std::make_unique<bullet::RagdollWorld>(*m_world, m_method);
+}
+
+Scene::~Scene() {
+    m_ragdolls.clear();
+    m_ragdollWorld.reset();
+    if (m_ground) m_world->removeRigidBody(m_ground.get());
+}
+
+bullet::Ragdoll& Scene::spawn(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options) {
+    options.method = m_method;
+    m_ragdolls.push_back(std::make_unique<bullet::Ragdoll>(std::move(asset), *m_ragdollWorld, options));
+    return *m_ragdolls.back();
+}
+
+ContactDepth Scene::deepestContact() const {
+    ContactDepth out;
+    for (int m = 0; m < m_dispatcher->getNumManifolds(); ++m) {
+        const btPersistentManifold* man = m_dispatcher->getManifoldByIndexInternal(m);
+        for (int c = 0; c < man->getNumContacts(); ++c) {
+            const double depth = -static_cast<double>(man->getContactPoint(c).getDistance());
+            if (depth > out.depthM) out = {depth, man->getBody0(), man->getBody1()};
+        }
+    }
+    return out;
+}
+
+} // namespace afb::sim
