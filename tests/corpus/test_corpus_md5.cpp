@@ -61,6 +61,34 @@ TEST_CASE("corpus md5: every well-formed file parses without errors", "[corpus][
     CHECK(anims >= 9);
 }
 
+TEST_CASE("corpus md5: every well-formed file reads back equal after writing", "[corpus][md5][writer]") {
+    AFB_REQUIRE_CORPUS(dir);
+    std::size_t files = 0;
+    for (const fs::path& file : md5Files(dir)) {
+        if (isMalformedInput(fs::relative(file, dir))) continue;
+        INFO(file.string());
+        text::Diagnostics diags;
+        if (file.extension() == ".md5mesh") {
+            const auto mesh = decl::loadMd5Mesh(file, diags);
+            REQUIRE(mesh);
+            const auto again = decl::parseMd5Mesh(decl::writeMd5Mesh(*mesh), "written.md5mesh", diags);
+            INFO(diags.str());
+            REQUIRE(again);
+            CHECK(*again == *mesh);
+        } else {
+            const auto anim = decl::loadMd5Anim(file, diags);
+            REQUIRE(anim);
+            const auto again = decl::parseMd5Anim(decl::writeMd5Anim(*anim), "written.md5anim", diags);
+            INFO(diags.str());
+            REQUIRE(again);
+            CHECK(*again == *anim);
+        }
+        CHECK(diags.errorCount() == 0);
+        ++files;
+    }
+    CHECK(files >= 17);
+}
+
 TEST_CASE("corpus md5: malformed files are rejected with a located, specific error", "[corpus][md5]") {
     AFB_REQUIRE_CORPUS(dir);
     struct Case {

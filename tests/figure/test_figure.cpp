@@ -107,12 +107,9 @@ decl::AfDecl parseDecl(const std::string& af) {
 
 figure::Skeleton skeletonOf(const std::vector<TestJoint>& joints) {
     text::Diagnostics d;
-    const auto mesh = decl::parseMd5Mesh(test::md5MeshText(joints), "test.md5mesh", d);
-    const auto anim = decl::parseMd5Anim(test::md5AnimText(joints), "test.md5anim", d);
+    auto skeleton =
+        figure::Skeleton::build(test::md5Mesh(joints), test::md5Anim(joints), Vector3d::Zero(), d, "test");
     INFO(d.str());
-    REQUIRE(mesh);
-    REQUIRE(anim);
-    auto skeleton = figure::Skeleton::build(*mesh, *anim, Vector3d::Zero(), d, "test");
     REQUIRE(skeleton);
     return *skeleton;
 }

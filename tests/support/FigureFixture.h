@@ -1,14 +1,14 @@
 #pragma once
-// Builds figures from inline text for tests: an md5 skeleton from a joint list, an .af decl, and the Figure.
-#include <optional>
-#include <sstream>
-#include <string>
-#include <vector>
-
+// Builds figures for tests: md5 values of a skeleton from a joint list (text only through the md5 writers),
+// an .af decl from inline text, and the Figure.
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
+
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace afb::test {
 
@@ -19,39 +19,46 @@ struct TestJoint {
     double x, y, z;
 };
 
-/// md5mesh text of a skeleton with identity orientations and one triangle weighted to the last joint.
-inline std::string md5MeshText(const std::vector<TestJoint>& joints) {
-    std::ostringstream s;
-    s << "MD5Version 10\ncommandline \"\"\nnumJoints " << joints.size() << "\nnumMeshes 1\njoints {\n";
-    for (const TestJoint& j : joints)
-        s << "\"" << j.name << "\" " << j.parent << " ( " << j.x << " " << j.y << " " << j.z << " ) ( 0 0 0 )\n";
-    s << "}\nmesh {\nshader \"x\"\nnumverts 3\nvert 0 ( 0 0 ) 0 1\nvert 1 ( 0 0 ) 1 1\nvert 2 ( 0 0 ) 2 1\n"
-      << "numtris 1\ntri 0 0 1 2\nnumweights 3\n";
-    const std::size_t last = joints.size() - 1;
-    s << "weight 0 " << last << " 1 ( 0 0 0 )\nweight 1 " << last << " 1 ( 1 0 0 )\nweight 2 " << last
-      << " 1 ( 0 1 0 )\n}\n";
-    return s.str();
+/// An md5mesh of a skeleton with identity orientations and one triangle weighted to the last joint.
+inline decl::Md5Mesh md5Mesh(const std::vector<TestJoint>& joints) {
+    decl::Md5Mesh mesh;
+    for (const TestJoint& j : joints) mesh.joints.push_back({j.name, j.parent, {j.x, j.y, j.z}, {0, 0, 0}});
+    const int last = static_cast<int>(joints.size()) - 1;
+    decl::Md5SubMesh sub;
+    sub.shader = "x";
+    sub.verts = {{0, 0, 0, 1}, {0, 0, 1, 1}, {0, 0, 2, 1}};
+    sub.tris = {{{0, 1, 2}}};
+    sub.weights = {{last, 1, {0, 0, 0}}, {last, 1, {1, 0, 0}}, {last, 1, {0, 1, 0}}};
+    mesh.meshes.push_back(sub);
+    return mesh;
 }
 
 /// A one-frame af_pose md5anim equal to the mesh's bind pose (identity orientations).
-inline std::string md5AnimText(const std::vector<TestJoint>& joints) {
-    std::ostringstream s;
-    s << "MD5Version 10\ncommandline \"\"\nnumFrames 1\nnumJoints " << joints.size()
-      << "\nframeRate 24\nnumAnimatedComponents 0\nhierarchy {\n";
-    for (const TestJoint& j : joints) s << "\"" << j.name << "\" " << j.parent << " 0 0\n";
-    s << "}\nbounds {\n( -1 -1 -1 ) ( 1 1 1 )\n}\nbaseframe {\n";
+inline decl::Md5Anim md5Anim(const std::vector<TestJoint>& joints) {
+    decl::Md5Anim anim;
+    anim.frameRate = 24;
     for (const TestJoint& j : joints) {
-        double px = j.x, py = j.y, pz = j.z;
+        anim.hierarchy.push_back({j.name, j.parent, 0, 0});
+        decl::Vec3 p{j.x, j.y, j.z};
         if (j.parent >= 0) {
-            const TestJoint& p = joints[static_cast<std::size_t>(j.parent)];
-            px -= p.x;
-            py -= p.y;
-            pz -= p.z;
+            const TestJoint& parent = joints[static_cast<std::size_t>(j.parent)];
+            p = {j.x - parent.x, j.y - parent.y, j.z - parent.z};
         }
-        s << "( " << px << " " << py << " " << pz << " ) ( 0 0 0 )\n";
+        anim.baseframe.push_back({p, {0, 0, 0}});
     }
-    s << "}\nframe 0 {\n}\n";
-    return s.str();
+    anim.bounds = {{{-1, -1, -1}, {1, 1, 1}}};
+    anim.frames = {{}};
+    return anim;
+}
+
+/// md5mesh text of md5Mesh(joints), for tests that need a file.
+inline std::string md5MeshText(const std::vector<TestJoint>& joints) {
+    return decl::writeMd5Mesh(md5Mesh(joints));
+}
+
+/// md5anim text of md5Anim(joints), for tests that need a file.
+inline std::string md5AnimText(const std::vector<TestJoint>& joints) {
+    return decl::writeMd5Anim(md5Anim(joints));
 }
 
 /// Everything a test needs to keep alive around a built figure.
@@ -64,11 +71,10 @@ struct BuiltFigure {
 inline BuiltFigure buildTestFigure(const std::string& afText, const std::vector<TestJoint>& joints,
                                    figure::UnitSystem units = {}) {
     BuiltFigure out;
-    const auto mesh = decl::parseMd5Mesh(md5MeshText(joints), "test.md5mesh", out.diagnostics);
-    const auto anim = decl::parseMd5Anim(md5AnimText(joints), "test.md5anim", out.diagnostics);
     const auto af = decl::parseAf(afText, "test.af", out.diagnostics);
-    if (!mesh || !anim || !af || af->decls.empty()) return out;
-    const auto skeleton = figure::Skeleton::build(*mesh, *anim, Eigen::Vector3d::Zero(), out.diagnostics, "test");
+    if (!af || af->decls.empty()) return out;
+    const auto skeleton = figure::Skeleton::build(md5Mesh(joints), md5Anim(joints), Eigen::Vector3d::Zero(),
+                                                  out.diagnostics, "test");
     if (!skeleton) return out;
     out.figure = figure::buildFigure({&af->decls[0], &*skeleton, units}, out.diagnostics);
     return out;

@@ -84,4 +84,11 @@ std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fi
 /// Reads and parses one `.md5anim` file.
 std::optional<Md5Anim> loadMd5Anim(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 
+/// Canonical `.md5anim` text of `anim`, in the layout and number form of writeMd5Mesh; each frame has one
+/// line per animated joint (a line starts at every startIndex). numFrames and numJoints are the vector sizes.
+/// `parseMd5Anim(writeMd5Anim(a)) == a` for every `a` that parseMd5Anim can produce. Throws
+/// std::invalid_argument when a string cannot be written (see writeMd5Mesh), when baseframe and hierarchy or
+/// bounds and frames differ in length, or when a frame does not hold numAnimatedComponents values.
+std::string writeMd5Anim(const Md5Anim& anim);
+
 } // namespace afb::decl

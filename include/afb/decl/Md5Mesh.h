@@ -86,4 +86,12 @@ std::optional<Md5Mesh> parseMd5Mesh(std::string_view text, const std::string& fi
 /// Reads and parses one `.md5mesh` file.
 std::optional<Md5Mesh> loadMd5Mesh(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 
+/// Canonical `.md5mesh` text of `mesh`, laid out as the id exporters write it (one entry a line, blocks
+/// indented with a tab); counts are the vector sizes. Every number is in its shortest fixed-point form that
+/// reads back as exactly the same double (so a value rounded to d decimals prints with at most d decimals).
+/// `parseMd5Mesh(writeMd5Mesh(m)) == m` for every `m` that parseMd5Mesh can produce. Throws
+/// std::invalid_argument when a string holds a quote, a line break or a NUL byte (md5 strings have no
+/// escapes).
+std::string writeMd5Mesh(const Md5Mesh& mesh);
+
 } // namespace afb::decl
