@@ -11,7 +11,7 @@
 namespace afb::bullet {
 
 using figure::FigureConstraint;
-using ConstraintType = decl::ConstraintType;
+using figure::JointType;
 
 namespace {
 
@@ -277,8 +277,8 @@ void Ragdoll::addConstraints(int iterations) {
         int frictionRows = 0;
 
         switch (c.type) {
-        case ConstraintType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
-        case ConstraintType::BallAndSocket:
+        case JointType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
+        case JointType::BallAndSocket:
             frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
             frictionRows = 3;
             if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
@@ -302,7 +302,7 @@ void Ragdoll::addConstraints(int iterations) {
                 main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
             }
             break;
-        case ConstraintType::Universal: {
+        case JointType::Universal: {
             // No relative spin about the shafts (homokinetic, §4.4): cone-twist with twist locked, swing free;
             // frames' X axes are shaft 1 (body1) and −shaft 2 (body2), aligned at the load pose.
             auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
@@ -313,7 +313,7 @@ void Ragdoll::addConstraints(int iterations) {
                                   fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
             break;
         }
-        case ConstraintType::Hinge: {
+        case JointType::Hinge: {
             auto h = std::make_unique<btHingeConstraint>(a, b, fa, fb, false);
             if (const auto* range = std::get_if<figure::HingeRange>(&c.limit))
                 h->setLimit(static_cast<btScalar>(range->lowerRad), static_cast<btScalar>(range->upperRad), 1,
@@ -323,7 +323,7 @@ void Ragdoll::addConstraints(int iterations) {
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
             break;
         }
-        case ConstraintType::Slider: {
+        case JointType::Slider: {
             auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
             s->setLowerLinLimit(1); // lower > upper: free along the axis
             s->setUpperLinLimit(-1);
@@ -332,7 +332,7 @@ void Ragdoll::addConstraints(int iterations) {
             main = std::move(s);
             break;
         }
-        case ConstraintType::Spring: {
+        case JointType::Spring: {
             SpringConstraint::Params p;
             p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
             p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
@@ -346,14 +346,14 @@ void Ragdoll::addConstraints(int iterations) {
         }
 
         // Pyramid limits (ball) and every universal limit: our direction-limit rows.
-        if (c.type == ConstraintType::Universal || c.type == ConstraintType::BallAndSocket) {
+        if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
             if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1), b2Rot * toBt(p->basisInBody2),
                                                                    DirectionLimitConstraint::Shape::Pyramid,
                                                                    static_cast<btScalar>(p->halfAngle1Rad),
                                                                    static_cast<btScalar>(p->halfAngle2Rad));
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
-            if (cone && c.type == ConstraintType::Universal)
+            if (cone && c.type == JointType::Universal)
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
                                                                    basisWithX(b2Rot * toBt(cone->axisInBody2)),
                                                                    DirectionLimitConstraint::Shape::Cone,

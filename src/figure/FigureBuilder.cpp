@@ -22,8 +22,6 @@ namespace {
 using decl::AfBody;
 using decl::AfConstraint;
 using decl::AfVector;
-using decl::ConstraintType;
-using decl::ShapeKind;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
@@ -39,6 +37,37 @@ std::string lower(std::string s) {
     return s;
 }
 
+// The decl's keywords in the figure's words: the one place they are translated.
+ShapeType shapeTypeOf(decl::ShapeKind kind) {
+    switch (kind) {
+    case decl::ShapeKind::Box: return ShapeType::Box;
+    case decl::ShapeKind::Octahedron: return ShapeType::Octahedron;
+    case decl::ShapeKind::Dodecahedron: return ShapeType::Dodecahedron;
+    case decl::ShapeKind::Cylinder: return ShapeType::Cylinder;
+    case decl::ShapeKind::Cone: return ShapeType::Cone;
+    case decl::ShapeKind::Bone: return ShapeType::Bone;
+    }
+    return ShapeType::Box;
+}
+
+JointType jointTypeOf(decl::ConstraintType type) {
+    switch (type) {
+    case decl::ConstraintType::Fixed: return JointType::Fixed;
+    case decl::ConstraintType::BallAndSocket: return JointType::BallAndSocket;
+    case decl::ConstraintType::Universal: return JointType::Universal;
+    case decl::ConstraintType::Hinge: return JointType::Hinge;
+    case decl::ConstraintType::Slider: return JointType::Slider;
+    case decl::ConstraintType::Spring: return JointType::Spring;
+    }
+    return JointType::Fixed;
+}
+
+// decl::contentsBits yields the engine's bits, which FigureBody stores as they are.
+static_assert(kContentsSolid == decl::kContentsSolid && kContentsPlayerClip == decl::kContentsPlayerClip &&
+              kContentsMonsterClip == decl::kContentsMonsterClip &&
+              kContentsMoveableClip == decl::kContentsMoveableClip && kContentsBody == decl::kContentsBody &&
+              kContentsCorpse == decl::kContentsCorpse);
+
 // A body while it is built: Doom units until the final conversion.
 struct Work {
     std::size_t declIndex = 0;
@@ -49,7 +78,7 @@ struct Work {
     double volume = 0;
     double mass = 0;
     Matrix3d inertia = Matrix3d::Identity(); // about the COM in the body frame, Doom units
-    bool isBox = false;
+    ShapeType type = ShapeType::Box;
     int sidesUsed = 0;
 };
 
@@ -169,23 +198,24 @@ class Builder {
         const std::string what = "body '" + b.name + "'";
 
         const decl::AfShape shape = b.model.value_or(decl::AfShape{});
+        const ShapeType type = shapeTypeOf(shape.kind);
         const Vector3d v1 = eval(shape.v1, b.location, what);
         const Vector3d v2 = eval(shape.v2, b.location, what);
         const Vector3d origin = b.origin ? eval(*b.origin, b.location, what) : Vector3d::Zero();
         Matrix3d axis = Matrix3d::Identity();
-        if (b.angles && shape.kind != ShapeKind::Bone && b.angles->form == AfVector::Form::Literal)
+        if (b.angles && type != ShapeType::Bone && b.angles->form == AfVector::Form::Literal)
             axis = anglesToRotation(b.angles->literal.x, b.angles->literal.y, b.angles->literal.z);
-        if (b.angles && shape.kind == ShapeKind::Bone)
+        if (b.angles && type == ShapeType::Bone)
             warning(b.location, what + ": angles are ignored for a bone (its axis runs from v1 to v2)");
 
         const int sides = static_cast<int>(std::clamp<std::int64_t>(shape.numSides, -1000, 1000));
-        switch (shape.kind) {
-        case ShapeKind::Box: w.polytope = makeBox(v1, v2); break;
-        case ShapeKind::Octahedron: w.polytope = makeOctahedron(v1, v2); break;
-        case ShapeKind::Dodecahedron: w.polytope = makeDodecahedron(v1, v2); break;
-        case ShapeKind::Cylinder:
-        case ShapeKind::Cone: {
-            const ShapeBuild sb = shape.kind == ShapeKind::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
+        switch (type) {
+        case ShapeType::Box: w.polytope = makeBox(v1, v2); break;
+        case ShapeType::Octahedron: w.polytope = makeOctahedron(v1, v2); break;
+        case ShapeType::Dodecahedron: w.polytope = makeDodecahedron(v1, v2); break;
+        case ShapeType::Cylinder:
+        case ShapeType::Cone: {
+            const ShapeBuild sb = type == ShapeType::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
             w.polytope = sb.polytope;
             w.sidesUsed = sb.effectiveSides;
             if (sb.clamped)
@@ -193,7 +223,7 @@ class Builder {
                                         std::to_string(sb.effectiveSides) + " (the engine's trace-model limits)");
             break;
         }
-        case ShapeKind::Bone: {
+        case ShapeType::Bone: {
             const double length = (v2 - v1).norm();
             if (!(length > 0.0)) {
                 error(b.location, what + ": bone from v1 to v2 has zero length");
@@ -204,7 +234,7 @@ class Builder {
             break;
         }
         }
-        w.isBox = shape.kind == ShapeKind::Box;
+        w.type = type;
 
         // §2.2: mass properties at density 1 give the local COM c; the body origin moves to origin + R·c.
         const MassProperties unit = computeMassProperties(w.polytope, 1.0);
@@ -321,11 +351,11 @@ class Builder {
         }
         const Transform poseDoom{w.pose.rotation * q, w.pose.position};
 
-        out.shape.kind = b.model.value_or(decl::AfShape{}).kind;
+        out.shape.kind = w.type;
         out.shape.sidesUsed = w.sidesUsed;
         out.shape.faces = w.polytope.faces;
         for (const Vector3d& p : w.polytope.vertices) out.shape.vertices.push_back(q.transpose() * p * s());
-        if (w.isBox && q.isIdentity(0.0)) {
+        if (w.type == ShapeType::Box && q.isIdentity(0.0)) {
             Vector3d half = Vector3d::Zero();
             for (const Vector3d& p : out.shape.vertices) half = half.cwiseMax(p.cwiseAbs());
             out.shape.boxHalfExtents = half;
@@ -348,7 +378,7 @@ class Builder {
         out.angularDamping = 1.0 - std::pow(1.0 - f.angular, stepsPerSecond);
         out.selfCollision = b.selfCollision.value_or(w.settings.selfCollision);
         out.contents = contents(b.contents.value_or(w.settings.contents), b, "contents");
-        out.clipMask = contents(b.clipMask.value_or(w.settings.clipMask), b, "clipMask") | decl::kContentsMoveableClip;
+        out.clipMask = contents(b.clipMask.value_or(w.settings.clipMask), b, "clipMask") | kContentsMoveableClip;
         auto direction = [&](const std::optional<AfVector>& v, const char* what) -> std::optional<Vector3d> {
             if (!v) return std::nullopt;
             const Vector3d d = eval(*v, b.location, "body '" + b.name + "' " + what);
@@ -464,7 +494,7 @@ class Builder {
         FigureConstraint out;
         out.name = c.name;
         out.location = c.location;
-        out.type = c.type;
+        out.type = jointTypeOf(c.type);
 
         const std::string name1 = c.body1.value_or(m_decl.defaultBody1(i));
         const std::optional<int> b1 = bodyIndex(name1);
@@ -498,21 +528,21 @@ class Builder {
             error(c.location, what + ": " + key + " is a zero vector (the engine needs it; it defaults to 0)");
             return std::nullopt;
         };
-        out.friction = c.type == ConstraintType::Fixed ? 0.0 : c.friction.value_or(0.5);
-        if ((c.type == ConstraintType::Slider || c.type == ConstraintType::Spring) && c.friction && *c.friction != 0.0)
+        out.friction = out.type == JointType::Fixed ? 0.0 : c.friction.value_or(0.5);
+        if ((out.type == JointType::Slider || out.type == JointType::Spring) && c.friction && *c.friction != 0.0)
             warning(c.location, what + ": friction is parsed but never applied by the engine to this type");
-        if (c.type == ConstraintType::Slider || c.type == ConstraintType::Spring) out.friction = 0.0;
+        if (out.type == JointType::Slider || out.type == JointType::Spring) out.friction = 0.0;
 
         Transform frame; // model space, metres; origin = anchor
-        switch (c.type) {
-        case ConstraintType::Fixed:
+        switch (out.type) {
+        case JointType::Fixed:
             frame = body1.loadPose;
             break;
-        case ConstraintType::BallAndSocket:
+        case JointType::BallAndSocket:
             frame = {ref, point(c.anchor)};
             out.limit = limit(c, out, what, std::nullopt);
             break;
-        case ConstraintType::Universal: {
+        case JointType::Universal: {
             if (!c.shafts) {
                 error(c.location, what + ": no shafts (both default to zero vectors in the engine)");
                 return;
@@ -527,14 +557,14 @@ class Builder {
             out.limit = limit(c, out, what, s1->normalized());
             break;
         }
-        case ConstraintType::Hinge: {
+        case JointType::Hinge: {
             const auto axis = direction(c.axis, "axis");
             if (!axis) return;
             frame = {frameWithAxis(*axis, 2), point(c.anchor)};
             if (const auto* h = std::get_if<decl::HingeLimit>(&c.limit)) out.limit = hingeRange(*h, axis->norm(), c, what);
             break;
         }
-        case ConstraintType::Slider: {
+        case JointType::Slider: {
             const Vector3d raw = c.axis ? eval(*c.axis, c.location, what) : Vector3d::UnitX();
             if (!(raw.norm() > 0.0)) {
                 error(c.location, what + ": axis is a zero vector");
@@ -543,7 +573,7 @@ class Builder {
             frame = {frameWithAxis(raw, 0), body1.loadPose.position};
             break;
         }
-        case ConstraintType::Spring:
+        case JointType::Spring:
             if (!spring(c, out, what)) return;
             out.frameInBody1 = inBody(out.body1, {Matrix3d::Identity(), point(c.anchor)});
             out.frameInBody2 = inBody(out.body2, {Matrix3d::Identity(), point(c.anchor2)});
@@ -692,7 +722,7 @@ class Builder {
             const FigureBody& b = m_figure.bodies[static_cast<std::size_t>(c.body2)];
             const double ratio = std::max(a.massKg, b.massKg) / std::min(a.massKg, b.massKg);
             if (ratio > 10.0)
-                warning(c.location, std::string(decl::keywordOf(c.type)) + " '" + c.name + "' joins masses " +
+                warning(c.location, std::string(toString(c.type)) + " '" + c.name + "' joins masses " +
                                         fmt(a.massKg) + " and " + fmt(b.massKg) +
                                         " (more than 10:1): the solver struggles with such ratios");
         }

@@ -28,10 +28,10 @@ double wrap(double a) { return std::remainder(a, 2 * kPi); }
 // How far constraint `i` of `r` is violated now: anchor separation (m) and limit excess (rad).
 std::pair<double, double> constraintError(const Ragdoll& r, int i) {
     const figure::FigureConstraint& c = r.figure().constraints[static_cast<std::size_t>(i)];
-    if (c.type == decl::ConstraintType::Spring) return {0, 0};
+    if (c.type == figure::JointType::Spring) return {0, 0};
     const auto [a, b] = r.constraintFramesWorld(i);
     double anchor = (a.getOrigin() - b.getOrigin()).length();
-    if (c.type == decl::ConstraintType::Slider) { // free along the axis: only the perpendicular part counts
+    if (c.type == figure::JointType::Slider) { // free along the axis: only the perpendicular part counts
         const btVector3 axis = b.getBasis().getColumn(0);
         const btVector3 d = a.getOrigin() - b.getOrigin();
         anchor = (d - axis * d.dot(axis)).length();

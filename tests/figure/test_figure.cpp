@@ -655,15 +655,15 @@ TEST_CASE("figure: settings are captured in parse order (§1.8, §8 item 3)", "[
     CHECK(p.linearFrictionPerStep == Approx(0.01));
     CHECK(p.angularFrictionPerStep == Approx(0.01));
     CHECK(p.contactFriction == Approx(0.8));
-    CHECK(p.contents == decl::kContentsCorpse);
-    CHECK(p.clipMask == (decl::kContentsSolid | decl::kContentsCorpse | decl::kContentsMoveableClip));
+    CHECK(p.contents == figure::kContentsCorpse);
+    CHECK(p.clipMask == (figure::kContentsSolid | figure::kContentsCorpse | figure::kContentsMoveableClip));
     CHECK(p.selfCollision);
     const FigureBody& c = b.body("chest");
     CHECK(c.linearFrictionPerStep == Approx(0.1));
     CHECK(c.angularFrictionPerStep == Approx(0.2));
     CHECK(c.contactFriction == Approx(0.3));
-    CHECK(c.contents == decl::kContentsBody);
-    CHECK(c.clipMask == (decl::kContentsSolid | decl::kContentsMoveableClip)); // MOVEABLECLIP always added
+    CHECK(c.contents == figure::kContentsBody);
+    CHECK(c.clipMask == (figure::kContentsSolid | figure::kContentsMoveableClip)); // MOVEABLECLIP always added
     CHECK_FALSE(c.selfCollision);
     CHECK_FALSE(b.figure->selfCollision); // the switch is the final settings value
 }
@@ -714,7 +714,7 @@ TEST_CASE("figure: constraint frames coincide at the load pose for every constra
         CHECK(isRotation(c.frameInBody1.rotation));
         CHECK(isRotation(c.frameInBody2.rotation));
         const auto [a, w] = framesModel(f, c);
-        if (c.type == decl::ConstraintType::Spring) continue; // anchors differ by design, checked below
+        if (c.type == figure::JointType::Spring) continue; // anchors differ by design, checked below
         CHECK(near(a.position, w.position, kTight));
         CHECK(near(a.rotation, w.rotation, kTight));
     }
@@ -752,7 +752,7 @@ TEST_CASE("figure: constraint frames coincide at the load pose for every constra
     // §4.1: every type but spring disables collision between its bodies.
     for (const FigureConstraint& c : f.constraints) {
         INFO(c.name);
-        CHECK(c.disablesCollision == (c.type != decl::ConstraintType::Spring));
+        CHECK(c.disablesCollision == (c.type != figure::JointType::Spring));
     }
 }
 
@@ -1026,7 +1026,7 @@ TEST_CASE("figure findings: unknown contents names end the list (§1.6)", "[figu
     INFO(b.findings.str());
     REQUIRE(b.figure);
     CHECK(b.hasWarning("body \"head\"", "trigger"));
-    CHECK(b.body("head").contents == decl::kContentsCorpse);
+    CHECK(b.body("head").contents == figure::kContentsCorpse);
 }
 
 TEST_CASE("figure findings: joints contained by no body or by two (§5.3)", "[figure]") {
