@@ -34,6 +34,11 @@ DirectionLimitConstraint::DirectionLimitConstraint(btRigidBody& a, btRigidBody& 
     : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_shaftInA(shaftInA.normalized()), m_basisInB(basisInB),
       m_shape(shape), m_half1(halfAngle1Rad), m_half2(halfAngle2Rad) {}
 
+// The excesses here are the same quantities as figure::limitExcessRad's cone and pyramid cases
+// (figure/Limits.h: cone angle minus half angle, exact atan2 planar angles minus their half angles), and a
+// test holds the two to agree. They are computed again here, not through Limits.h, because each row needs the
+// intermediate values (s·f, s·l, s·u, the rotation axis) for its Jacobian, and because the solver works in
+// btScalar: routing the angle through Eigen's doubles would change the float build's solution.
 int DirectionLimitConstraint::activeRows(Row rows[2]) const {
     const btVector3 s = m_rbA.getCenterOfMassTransform().getBasis() * m_shaftInA;
     const btMatrix3x3 basis = m_rbB.getCenterOfMassTransform().getBasis() * m_basisInB;

@@ -136,6 +136,7 @@ void Builder::buildConstraint(std::size_t i) {
     }
     out.frameInBody1 = inBody(out.body1, frame);
     out.frameInBody2 = inBody(out.body2, frame);
+    lintLimitAtLoadPose(out, what);
     m_figure.constraints.push_back(std::move(out));
 }
 
@@ -160,11 +161,6 @@ Limit Builder::limit(const AfConstraint& c, const FigureConstraint& out, const s
         l.axisInBody2 = dirInBody(out.body2, a.normalized());
         l.shaftInBody1 = dirInBody(out.body1, *shaft);
         l.halfAngleRad = 0.5 * cone->angleDeg * kRadPerDeg;
-        const double start = std::acos(std::clamp(a.normalized().dot(*shaft), -1.0, 1.0));
-        if (start > l.halfAngleRad + 1e-6)
-            warning(c.location, what + ": the shaft starts " + fmt(start / kRadPerDeg) +
-                                    " deg from the cone axis, outside the half-angle " +
-                                    fmt(cone->angleDeg / 2) + " deg: it is pushed in at once");
         return l;
     }
     if (const auto* pyr = std::get_if<decl::PyramidLimit>(&c.limit)) {
@@ -178,19 +174,12 @@ Limit Builder::limit(const AfConstraint& c, const FigureConstraint& out, const s
         const PitchYaw py = toAngles(a);
         const Matrix3d basis = anglesToRotation(py.pitchDeg, py.yawDeg, pyr->rollDeg);
         PyramidLimit l;
-        l.basisInBody2 = out.body2 >= 0
-                             ? Matrix3d(m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation.transpose() * basis)
-                             : basis;
+        l.basisInBody2 = basis;
+        if (out.body2 >= 0)
+            l.basisInBody2 = m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation.transpose() * basis;
         l.shaftInBody1 = dirInBody(out.body1, *shaft);
         l.halfAngle1Rad = 0.5 * pyr->angle1Deg * kRadPerDeg;
         l.halfAngle2Rad = 0.5 * pyr->angle2Deg * kRadPerDeg;
-        const Vector3d sb = basis.transpose() * *shaft; // shaft in (f, l, u) at the load pose
-        const double a1 = std::atan2(sb.y(), sb.x()), a2 = std::atan2(sb.z(), sb.x());
-        if (std::abs(a1) > l.halfAngle1Rad + 1e-6 || std::abs(a2) > l.halfAngle2Rad + 1e-6)
-            warning(c.location, what + ": the shaft starts outside the pyramid (" + fmt(a1 / kRadPerDeg) + ", " +
-                                    fmt(a2 / kRadPerDeg) + " deg from its axis; limits " +
-                                    fmt(pyr->angle1Deg / 2) + ", " + fmt(pyr->angle2Deg / 2) +
-                                    " deg): it is pushed in at once");
         return l;
     }
     return std::monostate{};
@@ -213,10 +202,6 @@ Limit Builder::hingeRange(const decl::HingeLimit& h, double axisLength, const Af
     }
     centre = std::remainder(centre, 2 * std::numbers::pi);
     const double half = 0.5 * std::max(0.0, h.widthDeg) * kRadPerDeg;
-    if (std::abs(centre) > half + 1e-9)
-        warning(c.location, what + ": the limit [" + fmt((centre - half) / kRadPerDeg) + ", " +
-                                fmt((centre + half) / kRadPerDeg) +
-                                "] deg excludes the load pose (0 deg): the joint is pushed into range at once");
     return HingeRange{centre - half, centre + half};
 }
 

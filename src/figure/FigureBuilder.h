@@ -4,7 +4,8 @@
 //   BuildBodies.cpp     — shapes, mass properties, friction, contents (af-format §2.2, §3)
 //   BuildConstraints.cpp — constraint frames, limits and springs (§4)
 //   ContainedJoints.cpp — which body takes each joint's impacts (§5.3)
-//   Findings.cpp        — figure-wide findings (id's "behave weird or explode" list)
+//   Findings.cpp        — findings on the built figure: limits the load pose exceeds, id's "behave weird or
+//                         explode" list
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -92,6 +93,7 @@ class Builder {
     bool spring(const AfConstraint& c, FigureConstraint& out, const std::string& what);
 
     // Findings.cpp
+    void lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what);
     void checkFigure();
 
     const decl::AfDecl& m_decl;

@@ -1,11 +1,40 @@
-// Figure-wide findings: id's "behave weird or explode" list, checked on the built figure at its load pose.
+// Findings checked on the built figure at its load pose: limits that exclude it, and id's "behave weird or
+// explode" list.
 #include <algorithm>
 #include <map>
 
 #include "FigureBuilder.h"
 #include "afb/figure/Collision.h"
+#include "afb/figure/DoomMath.h"
+#include "afb/figure/Limits.h"
 
 namespace afb::figure::detail {
+
+// A limit the load pose already exceeds is enforced from the first step: the engine pushes the joint in at
+// once (§4.3, §4.5). The excess is measured as the drop metrics measure it (Limits.h), on the built frames.
+void Builder::lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what) {
+    auto rotation = [&](int body) -> Matrix3d {
+        if (body < 0) return Matrix3d::Identity(); // a world constraint's data is in model space
+        return m_figure.bodies[static_cast<std::size_t>(body)].loadPose.rotation;
+    };
+    const Matrix3d body1 = rotation(c.body1), body2 = rotation(c.body2);
+    const double excess = limitExcessRad(c, body1, body2);
+    auto deg = [](double rad) { return fmt(rad / kRadPerDeg); };
+    if (const auto* cone = std::get_if<ConeLimit>(&c.limit); cone && excess > 1e-6)
+        warning(c.location, what + ": the shaft starts " + deg(coneAngleRad(*cone, body1, body2)) +
+                                " deg from the cone axis, outside the half-angle " + deg(cone->halfAngleRad) +
+                                " deg: it is pushed in at once");
+    if (const auto* pyramid = std::get_if<PyramidLimit>(&c.limit); pyramid && excess > 1e-6) {
+        const Eigen::Vector2d a = pyramidPlanarAnglesRad(*pyramid, body1, body2);
+        warning(c.location, what + ": the shaft starts outside the pyramid (" + deg(a.x()) + ", " +
+                                deg(a.y()) + " deg from its axis; limits " + deg(pyramid->halfAngle1Rad) +
+                                ", " + deg(pyramid->halfAngle2Rad) + " deg): it is pushed in at once");
+    }
+    if (const auto* hinge = std::get_if<HingeRange>(&c.limit); hinge && excess > 1e-9)
+        warning(c.location, what + ": the limit [" + deg(hinge->lowerRad) + ", " + deg(hinge->upperRad) +
+                                "] deg excludes the load pose (0 deg): the joint is pushed into range at "
+                                "once");
+}
 
 void Builder::checkFigure() {
     // Names that differ only in case merge at load (§1.8).

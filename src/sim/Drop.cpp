@@ -12,6 +12,7 @@
 
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/figure/Limits.h"
 #include "afb/pose/SkeletonDriver.h"
 
 namespace afb::sim {
@@ -22,8 +23,6 @@ using bullet::RagdollAsset;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kExplodeSpeedMps = 100.0;
 constexpr double kExplodeAnchorM = 0.1;
-
-double wrap(double a) { return std::remainder(a, 2 * kPi); }
 
 // How far constraint `i` of `r` is violated now: anchor separation (m) and limit excess (rad).
 std::pair<double, double> constraintError(const Ragdoll& r, int i) {
@@ -36,24 +35,10 @@ std::pair<double, double> constraintError(const Ragdoll& r, int i) {
         const btVector3 d = a.getOrigin() - b.getOrigin();
         anchor = (d - axis * d.dot(axis)).length();
     }
-    double excess = 0;
     const btMatrix3x3 body1 = r.body(c.body1).getCenterOfMassTransform().getBasis();
     const btMatrix3x3 body2 = c.body2 >= 0 ? r.body(c.body2).getCenterOfMassTransform().getBasis()
                                            : r.spawnTransform().getBasis();
-    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
-        const btMatrix3x3 rel = b.getBasis().transpose() * a.getBasis();
-        const double phi = std::atan2(rel[1][0], rel[0][0]);
-        const double centre = 0.5 * (h->lowerRad + h->upperRad), half = 0.5 * (h->upperRad - h->lowerRad);
-        excess = std::max(0.0, std::abs(wrap(phi - centre)) - half);
-    } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-        const btVector3 s = body1 * bullet::toBt(cone->shaftInBody1), x = body2 * bullet::toBt(cone->axisInBody2);
-        excess = std::max(0.0, std::acos(std::clamp(static_cast<double>(s.dot(x)), -1.0, 1.0)) - cone->halfAngleRad);
-    } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-        const btVector3 s = body1 * bullet::toBt(p->shaftInBody1);
-        const btMatrix3x3 basis = body2 * bullet::toBt(p->basisInBody2);
-        const double sf = s.dot(basis.getColumn(0)), sl = s.dot(basis.getColumn(1)), su = s.dot(basis.getColumn(2));
-        excess = std::max({0.0, std::abs(std::atan2(sl, sf)) - p->halfAngle1Rad, std::abs(std::atan2(su, sf)) - p->halfAngle2Rad});
-    }
+    const double excess = figure::limitExcessRad(c, bullet::toEigen(body1), bullet::toEigen(body2));
     return {anchor, excess};
 }
 
