@@ -1135,6 +1135,31 @@ TEST_CASE("figure findings: mass outside [1, 100], mass ratio above 10:1, inerti
     CHECK(r.hasWarning("ballAndSocketJoint \"ratio\"", "10:1"));
 }
 
+TEST_CASE("figure findings: limits the load pose already exceeds (§4.3, §4.5)", "[figure]") {
+    // The chest is turned (yaw 90°): the lint measures on the built frames, which must not matter.
+    const Built b = build(R"(articulatedFigure t {
+	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 40 ) }
+	body "chest" { joint "Spine" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 60 ) angles ( 0, 90, 0 ) }
+	ballAndSocketJoint "coneIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) coneLimit ( 0, 0, 1 ), 60, ( 0, 0.5, 1 ) }
+	ballAndSocketJoint "coneOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) coneLimit ( 0, 0, 1 ), 60, ( 0, 1, 1 ) }
+	ballAndSocketJoint "pyrIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) pyramidLimit ( 1, 0, 0 ), 60, 40, 0, ( 1, 0.5, 0.3 ) }
+	ballAndSocketJoint "pyrOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) pyramidLimit ( 1, 0, 0 ), 60, 40, 0, ( 1, 0, 0.5 ) }
+	hinge "hingeIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) limit 30, 90, 0 }
+	hinge "hingeOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) limit 0, 60, 60 }
+	ballAndSocketJoint "worldOut" { body1 "pelvis" body2 "world" anchor ( 0, 0, 40 ) coneLimit ( 1, 0, 0 ), 20, ( 0, 0, 1 ) }
+}
+)");
+    INFO(b.findings.str());
+    REQUIRE(b.figure);
+    CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"coneIn\"", "starts"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"coneOut\"", "starts 45 deg from the cone axis, outside the half-angle 30"));
+    CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"pyrIn\"", "starts"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"pyrOut\"", "deg from its axis; limits 30, 20 deg"));
+    CHECK_FALSE(b.hasWarning("hinge \"hingeIn\"", "excludes"));
+    CHECK(b.hasWarning("hinge \"hingeOut\"", "[30, 90] deg excludes the load pose"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"worldOut\"", "starts 90 deg from the cone axis"));
+}
+
 TEST_CASE("figure findings: self-colliding bodies that overlap or touch at the load pose", "[figure]") {
     auto figureWith = [](const std::string& chestZ, const std::string& joint) {
         return "articulatedFigure t {\n"
