@@ -28,6 +28,12 @@ btVector3 anyPerpendicular(const btVector3& v) {
 
 // --- limit rows ---------------------------------------------------------------------------------------------
 
+// The excesses here are the same quantities as figure::limitExcessRad's cone, pyramid and hinge cases
+// (figure/Limits.h), and a test holds the two to agree. They are computed again here, not through Limits.h,
+// because each row needs the intermediate values (s·f, s·l, s·u, the rotation axis) for its Jacobian, and
+// because the solver works in btScalar: routing the angle through Eigen's doubles would change the float
+// build's solution.
+
 int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape shape, btScalar half1,
                        btScalar half2, btScalar margin, LimitRow rows[2]) {
     const btVector3 f = basis.getColumn(0), l = basis.getColumn(1), u = basis.getColumn(2);

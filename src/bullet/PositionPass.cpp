@@ -183,7 +183,7 @@ void positionSweep(Ragdoll& r, std::span<btPersistentManifold* const> manifolds,
     const figure::Figure& f = r.figure();
     for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
         const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
-        if (c.type == decl::ConstraintType::Spring) continue;
+        if (c.type == figure::JointType::Spring) continue;
         Side a = sideOf(&r.body(c.body1));
         Side b = c.body2 >= 0 ? sideOf(&r.body(c.body2)) : Side{};
         if (a.body == nullptr && b.body == nullptr) continue;
@@ -194,15 +194,15 @@ void positionSweep(Ragdoll& r, std::span<btPersistentManifold* const> manifolds,
             const auto [fa, fb] = frames();
             projectLimit(a, b, c, fa, fb, body2Basis);
         }
-        if (c.type == decl::ConstraintType::Fixed || c.type == decl::ConstraintType::Slider) {
+        if (c.type == figure::JointType::Fixed || c.type == figure::JointType::Slider) {
             const auto [fa, fb] = frames();
             projectOrientation(a, b, fa.getBasis(), fb.getBasis());
-        } else if (c.type == decl::ConstraintType::Hinge) {
+        } else if (c.type == figure::JointType::Hinge) {
             const auto [fa, fb] = frames();
             projectHingeAxis(a, b, fa.getBasis(), fb.getBasis());
         }
         const auto [fa, fb] = frames();
-        projectAnchor(a, b, fa, fb, c.type == decl::ConstraintType::Slider);
+        projectAnchor(a, b, fa, fb, c.type == figure::JointType::Slider);
     }
     for (btPersistentManifold* m : manifolds) {
         auto* oa = const_cast<btCollisionObject*>(m->getBody0());

@@ -9,11 +9,12 @@
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollWorld.h"
 #include "afb/figure/Collision.h"
+#include "afb/figure/Limits.h"
 
 namespace afb::bullet {
 
 using figure::FigureConstraint;
-using ConstraintType = decl::ConstraintType;
+using figure::JointType;
 
 namespace {
 
@@ -163,30 +164,19 @@ int Ragdoll::awakeBodyCount() const {
 Ragdoll::JointError Ragdoll::jointError(int i) const {
     const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
     JointError e;
-    if (c.type == ConstraintType::Spring) return e;
+    if (c.type == JointType::Spring) return e;
     const auto [a, b] = constraintFramesWorld(i);
     const btVector3 d = a.getOrigin() - b.getOrigin();
     e.anchorM = d.length();
-    if (c.type == ConstraintType::Slider) { // free along the axis: only the perpendicular part counts
+    if (c.type == JointType::Slider) { // free along the axis: only the perpendicular part counts
         const btVector3 axis = b.getBasis().getColumn(0);
         e.anchorM = (d - axis * d.dot(axis)).length();
     }
+    // One definition of a limit's excess (figure/Limits.h), in double, for every backend's metrics.
     const btMatrix3x3 body1 = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform().getBasis();
     const btMatrix3x3 body2 = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform().getBasis()
                                            : m_spawn.getBasis();
-    LimitRow rows[2];
-    int n = 0;
-    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit))
-        n = hingeRangeRow(a.getBasis(), b.getBasis(), static_cast<btScalar>(h->lowerRad),
-                          static_cast<btScalar>(h->upperRad), 0, rows[0]);
-    else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
-        n = directionLimitRows(body1 * toBt(cone->shaftInBody1), body2 * basisWithX(toBt(cone->axisInBody2)),
-                               LimitShape::Cone, static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
-    else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-        n = directionLimitRows(body1 * toBt(p->shaftInBody1), body2 * toBt(p->basisInBody2), LimitShape::Pyramid,
-                               static_cast<btScalar>(p->halfAngle1Rad), static_cast<btScalar>(p->halfAngle2Rad), 0,
-                               rows);
-    for (int k = 0; k < n; ++k) e.limitExcessRad = std::max(e.limitExcessRad, static_cast<double>(rows[k].excess));
+    e.limitExcessRad = figure::limitExcessRad(c, toEigen(body1), toEigen(body2));
     return e;
 }
 
@@ -315,8 +305,8 @@ void Ragdoll::addConstraints() {
         int frictionRows = 0;
 
         switch (c.type) {
-        case ConstraintType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
-        case ConstraintType::BallAndSocket:
+        case JointType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
+        case JointType::BallAndSocket:
             frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
             frictionRows = 3;
             if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
@@ -347,7 +337,7 @@ void Ragdoll::addConstraints() {
                 main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
             }
             break;
-        case ConstraintType::Universal: {
+        case JointType::Universal: {
             // No relative spin about the shafts (homokinetic, §4.4): cone-twist with twist locked, swing free;
             // frames' X axes are shaft 1 (body1) and −shaft 2 (body2), aligned at the load pose.
             auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
@@ -358,7 +348,7 @@ void Ragdoll::addConstraints() {
                                   fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
             break;
         }
-        case ConstraintType::Hinge: {
+        case JointType::Hinge: {
             auto h = std::make_unique<btHingeConstraint>(a, b, fa, fb, false);
             if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
                 const btScalar lo = static_cast<btScalar>(range->lowerRad), hi = static_cast<btScalar>(range->upperRad);
@@ -370,7 +360,7 @@ void Ragdoll::addConstraints() {
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
             break;
         }
-        case ConstraintType::Slider: {
+        case JointType::Slider: {
             auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
             s->setLowerLinLimit(1); // lower > upper: free along the axis
             s->setUpperLinLimit(-1);
@@ -379,7 +369,7 @@ void Ragdoll::addConstraints() {
             main = std::move(s);
             break;
         }
-        case ConstraintType::Spring: {
+        case JointType::Spring: {
             SpringConstraint::Params p;
             p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
             p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
@@ -393,14 +383,14 @@ void Ragdoll::addConstraints() {
         }
 
         // Pyramid limits (ball) and every universal limit: our direction-limit rows.
-        if (c.type == ConstraintType::Universal || c.type == ConstraintType::BallAndSocket) {
+        if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
             if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1), b2Rot * toBt(p->basisInBody2),
                                                                    DirectionLimitConstraint::Shape::Pyramid,
                                                                    static_cast<btScalar>(p->halfAngle1Rad),
                                                                    static_cast<btScalar>(p->halfAngle2Rad), policy);
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
-            if (cone && c.type == ConstraintType::Universal)
+            if (cone && c.type == JointType::Universal)
                 limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
                                                                    basisWithX(b2Rot * toBt(cone->axisInBody2)),
                                                                    DirectionLimitConstraint::Shape::Cone,

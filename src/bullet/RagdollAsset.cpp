@@ -4,31 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "afb/bullet/Convert.h"
+#include "afb/figure/Polytope.h"
 
 namespace afb::bullet {
 namespace {
 
-// Outward face planes (n, d) with n·p + d = 0 on the face, n·p + d ≤ 0 inside.
-btAlignedObjectArray<btVector3> facePlanes(const figure::BodyShape& shape) {
+// The figure's face planes as Bullet plane equations (n, d): n·p + d = 0 on the face, n·p + d ≤ 0 inside.
+btAlignedObjectArray<btVector3> btPlanes(const std::vector<figure::FacePlane>& faces) {
     btAlignedObjectArray<btVector3> planes;
-    for (const std::vector<int>& face : shape.faces) {
-        if (face.size() < 3) continue;
-        Eigen::Vector3d n = Eigen::Vector3d::Zero();
-        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-        for (std::size_t k = 0; k < face.size(); ++k) {
-            const Eigen::Vector3d& p = shape.vertices[static_cast<std::size_t>(face[k])];
-            const Eigen::Vector3d& q = shape.vertices[static_cast<std::size_t>(face[(k + 1) % face.size()])];
-            n += p.cross(q);
-            centre += p;
-        }
-        if (n.norm() == 0.0) continue;
-        n.normalize();
-        centre /= static_cast<double>(face.size());
-        btVector3 plane = toBt(n);
-        plane[3] = static_cast<btScalar>(-n.dot(centre));
+    for (const figure::FacePlane& face : faces) {
+        btVector3 plane = toBt(face.normal);
+        plane[3] = static_cast<btScalar>(-face.offset);
         planes.push_back(plane);
     }
     return planes;
@@ -39,9 +27,11 @@ btAlignedObjectArray<btVector3> facePlanes(const figure::BodyShape& shape) {
 std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) {
     std::shared_ptr<RagdollAsset> asset(new RagdollAsset(std::move(figure)));
     for (const figure::FigureBody& body : asset->m_figure.bodies) {
-        const btAlignedObjectArray<btVector3> planes = facePlanes(body.shape);
-        double inradius = std::numeric_limits<double>::infinity(); // COM (the body origin) to the nearest face
-        for (int i = 0; i < planes.size(); ++i) inradius = std::min(inradius, -static_cast<double>(planes[i][3]));
+        const std::vector<figure::FacePlane> faces =
+            figure::facePlanes(body.shape.vertices, body.shape.faces);
+        const btAlignedObjectArray<btVector3> planes = btPlanes(faces);
+        // COM (the body origin) to the nearest face, rounded to btScalar as the hull's planes are.
+        const double inradius = static_cast<btScalar>(figure::inRadius(faces));
         const double margin = std::max(0.0, std::min(kMaxMarginM, 0.2 * inradius));
         if (body.shape.boxHalfExtents) {
             auto box = std::make_unique<btBoxShape>(toBt(*body.shape.boxHalfExtents));

@@ -9,17 +9,6 @@
 namespace afb::cli {
 namespace {
 
-const char* shapeName(decl::ShapeKind k) {
-    switch (k) {
-    case decl::ShapeKind::Box: return "box";
-    case decl::ShapeKind::Octahedron: return "octahedron";
-    case decl::ShapeKind::Dodecahedron: return "dodecahedron";
-    case decl::ShapeKind::Cylinder: return "cylinder";
-    case decl::ShapeKind::Cone: return "cone";
-    case decl::ShapeKind::Bone: return "bone";
-    }
-    return "?";
-}
 const char* modName(figure::JointMod m) {
     return m == figure::JointMod::Position ? "position" : m == figure::JointMod::Both ? "both" : "orientation";
 }
@@ -55,7 +44,7 @@ nlohmann::json figureJson(const figure::Figure& f) {
         bodies.push_back({{"name", b.name},
                           {"joint", b.joint >= 0 ? f.skeleton.name(b.joint) : ""},
                           {"mod", modName(b.mod)},
-                          {"shape", shapeName(b.shape.kind)},
+                          {"shape", figure::toString(b.shape.kind)},
                           {"vertices", b.shape.vertices.size()},
                           {"volumeM3", b.volumeM3},
                           {"massKg", b.massKg},
@@ -69,7 +58,7 @@ nlohmann::json figureJson(const figure::Figure& f) {
     for (const figure::FigureConstraint& c : f.constraints) {
         const Eigen::Vector3d anchor = f.bodies[static_cast<std::size_t>(c.body1)].loadPose.apply(c.frameInBody1.position);
         constraints.push_back({{"name", c.name},
-                               {"type", decl::keywordOf(c.type)},
+                               {"type", figure::toString(c.type)},
                                {"body1", f.bodies[static_cast<std::size_t>(c.body1)].name},
                                {"body2", c.body2 >= 0 ? f.bodies[static_cast<std::size_t>(c.body2)].name : "world"},
                                {"anchorM", vec(anchor)},
@@ -94,7 +83,7 @@ void printFigure(const figure::Figure& f) {
     for (const figure::FigureBody& b : f.bodies) {
         const Eigen::Vector3d& c = b.loadPose.position;
         std::printf("%-14s %-14s %-11s %-12s %5zu %11.3e %9.3f  (%7.3f %7.3f %7.3f)  %.3e %.3e %.3e\n", b.name.c_str(),
-                    b.joint >= 0 ? f.skeleton.name(b.joint).c_str() : "-", modName(b.mod), shapeName(b.shape.kind),
+                    b.joint >= 0 ? f.skeleton.name(b.joint).c_str() : "-", modName(b.mod), figure::toString(b.shape.kind),
                     b.shape.vertices.size(), b.volumeM3, b.massKg, c.x(), c.y(), c.z(), b.inertiaKgM2.x(),
                     b.inertiaKgM2.y(), b.inertiaKgM2.z());
     }
@@ -102,7 +91,7 @@ void printFigure(const figure::Figure& f) {
                 "limit");
     for (const figure::FigureConstraint& c : f.constraints) {
         const Eigen::Vector3d a = f.bodies[static_cast<std::size_t>(c.body1)].loadPose.apply(c.frameInBody1.position);
-        std::printf("%-22s %-19s %-14s %-14s (%7.3f %7.3f %7.3f)  %s\n", c.name.c_str(), decl::keywordOf(c.type),
+        std::printf("%-22s %-19s %-14s %-14s (%7.3f %7.3f %7.3f)  %s\n", c.name.c_str(), figure::toString(c.type),
                     f.bodies[static_cast<std::size_t>(c.body1)].name.c_str(),
                     c.body2 >= 0 ? f.bodies[static_cast<std::size_t>(c.body2)].name.c_str() : "world", a.x(), a.y(),
                     a.z(), limitText(c).c_str());

@@ -350,67 +350,78 @@ std::optional<ResolvedEntity> Library::resolveEntity(std::string_view name,
     ResolvedEntity r;
     r.entityName = entity.name;
     r.entityLocation = entity.location;
-    const std::string where = "entityDef '" + entity.name + "'";
+    if (!mergeEntityKeys(entity, r, diagnostics)) return std::nullopt;
+    // Both of these report what they find, so one run names every missing piece.
+    const bool modelOk = resolveEntityModel(entity, r, diagnostics);
+    const bool figureOk = resolveEntityFigure(entity, r, diagnostics);
+    if (!modelOk || !figureOk) return std::nullopt;
+    return r;
+}
 
-    // 1. Keys, merged through the inherit graph (diamonds are fine, cycles are errors).
-    {
-        std::vector<EntityFrame> stack;
-        std::set<std::string, std::less<>> visited, onPath;
-        std::map<std::string, std::size_t, std::less<>> keyIndex;
-        const auto visit = [&](const EntityDef& def) {
-            visited.insert(lowerCopy(def.name));
-            onPath.insert(lowerCopy(def.name));
-            r.entityChain.push_back(def.name);
-            EntityFrame frame{&def, {}, 0};
-            for (auto& [key, value] : ownDict(def)) {
-                if (startsWithIgnoreCase(key, "inherit")) {
-                    frame.parents.push_back(value);
-                } else if (keyIndex.try_emplace(lowerCopy(key), r.keyValues.size()).second) {
-                    r.keyValues.emplace_back(key, value);
-                }
+// Keys, merged through the inherit graph into r.keyValues and r.entityChain (diamonds are fine, cycles are
+// errors).
+bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r,
+                              text::Diagnostics& diagnostics) const {
+    std::vector<EntityFrame> stack;
+    std::set<std::string, std::less<>> visited, onPath;
+    std::map<std::string, std::size_t, std::less<>> keyIndex;
+    const auto visit = [&](const EntityDef& def) {
+        visited.insert(lowerCopy(def.name));
+        onPath.insert(lowerCopy(def.name));
+        r.entityChain.push_back(def.name);
+        EntityFrame frame{&def, {}, 0};
+        for (auto& [key, value] : ownDict(def)) {
+            if (startsWithIgnoreCase(key, "inherit")) {
+                frame.parents.push_back(value);
+            } else if (keyIndex.try_emplace(lowerCopy(key), r.keyValues.size()).second) {
+                r.keyValues.emplace_back(key, value);
             }
-            stack.push_back(std::move(frame));
-        };
-        visit(entity);
-        while (!stack.empty()) {
-            EntityFrame& top = stack.back();
-            if (top.next == top.parents.size()) {
-                onPath.erase(lowerCopy(top.def->name));
-                stack.pop_back();
-                continue;
-            }
-            const std::string& parentName = top.parents[top.next++];
-            const auto parent = findEntityDef(parentName);
-            if (!parent) {
-                diagnostics.error(top.def->location, "entityDef '" + top.def->name + "' inherits '" +
-                                                         parentName + "', which is not defined");
-                return std::nullopt;
-            }
-            const std::string key = lowerCopy(parent->decl.name);
-            if (onPath.count(key)) {
-                std::string cycle;
-                bool inCycle = false;
-                for (const EntityFrame& f : stack) {
-                    inCycle = inCycle || lowerCopy(f.def->name) == key;
-                    if (inCycle) cycle += f.def->name + " -> ";
-                }
-                diagnostics.error(top.def->location, "entityDef inherit cycle: " + cycle + parent->decl.name);
-                return std::nullopt;
-            }
-            if (visited.count(key)) continue;
-            visit(parent->decl); // invalidates `top`
         }
+        stack.push_back(std::move(frame));
+    };
+    visit(entity);
+    while (!stack.empty()) {
+        EntityFrame& top = stack.back();
+        if (top.next == top.parents.size()) {
+            onPath.erase(lowerCopy(top.def->name));
+            stack.pop_back();
+            continue;
+        }
+        const std::string& parentName = top.parents[top.next++];
+        const auto parent = findEntityDef(parentName);
+        if (!parent) {
+            diagnostics.error(top.def->location, "entityDef '" + top.def->name + "' inherits '" + parentName +
+                                                     "', which is not defined");
+            return false;
+        }
+        const std::string key = lowerCopy(parent->decl.name);
+        if (onPath.count(key)) {
+            std::string cycle;
+            bool inCycle = false;
+            for (const EntityFrame& f : stack) {
+                inCycle = inCycle || lowerCopy(f.def->name) == key;
+                if (inCycle) cycle += f.def->name + " -> ";
+            }
+            diagnostics.error(top.def->location, "entityDef inherit cycle: " + cycle + parent->decl.name);
+            return false;
+        }
+        if (visited.count(key)) continue;
+        visit(parent->decl); // invalidates `top`
     }
+    return true;
+}
 
-    bool ok = true;
-
-    // 2. Model decl, mesh and af_pose (af-format §7.1).
+// The model decl, its mesh and its af_pose (af-format §7.1).
+bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r,
+                                 text::Diagnostics& diagnostics) const {
+    const std::string where = "entityDef '" + entity.name + "'";
     const std::optional<std::string> modelKey = nonEmpty(r.get("model"));
     if (!modelKey) {
         diagnostics.error(entity.location, where + " has no \"model\" key: a ragdoll needs a model decl with "
                                                    "anim af_pose");
-        ok = false;
-    } else if (!findModelDef(*modelKey)) {
+        return false;
+    }
+    if (!findModelDef(*modelKey)) {
         const bool isMesh = modelKey->size() >= 8 && modelKey->substr(modelKey->size() - 8) == ".md5mesh";
         diagnostics.error(
             entity.location,
@@ -418,76 +429,79 @@ std::optional<ResolvedEntity> Library::resolveEntity(std::string_view name,
                          "', a mesh file, not a model decl: the engine then has no animator, so no "
                          "af_pose and no ragdoll"
                    : "model decl '" + *modelKey + "' (\"model\" of " + where + ") not found");
-        ok = false;
-    } else if (std::optional<ResolvedModel> model = resolveModel(*modelKey, diagnostics); !model) {
-        ok = false;
-    } else {
-        r.model = std::move(model->model);
-        r.modelChain = std::move(model->chain);
-        r.modelName = r.model.name;
-        r.modelLocation = r.model.location;
-        if (auto mesh = contentPath(*r.model.mesh, "mesh", r.modelLocation, diagnostics))
-            r.meshPath = std::move(*mesh);
-        else
-            ok = false;
-
-        // idAF::Load asks for GetAnim("af_pose"): every anim whose alias is af_pose (af_pose, af_pose1, …),
-        // one picked at random when there are several.
-        std::vector<const ModelAnim*> poses;
-        for (const ModelAnim& a : r.model.anims)
-            if (a.alias() == "af_pose") poses.push_back(&a);
-        if (poses.empty()) {
-            diagnostics.error(r.modelLocation,
-                              "model decl " + r.modelName + " has no anim af_pose (a ragdoll needs it)");
-            ok = false;
-        } else {
-            const ModelAnim* pose = r.model.findAnim("af_pose");
-            if (!pose) pose = poses.front();
-            if (poses.size() > 1)
-                diagnostics.warning(pose->location,
-                                    "model decl " + r.modelName + " has " + std::to_string(poses.size()) +
-                                        " af_pose variants (the engine picks one at random); using '" +
-                                        pose->name + "'");
-            r.afPoseAnim = pose->name;
-            if (auto path = contentPath(pose->files.front(), "af_pose anim", pose->location, diagnostics))
-                r.afPosePath = std::move(*path);
-            else
-                ok = false;
-        }
+        return false;
     }
+    std::optional<ResolvedModel> model = resolveModel(*modelKey, diagnostics);
+    if (!model) return false;
+    r.model = std::move(model->model);
+    r.modelChain = std::move(model->chain);
+    r.modelName = r.model.name;
+    r.modelLocation = r.model.location;
+    bool ok = true;
+    if (auto mesh = contentPath(*r.model.mesh, "mesh", r.modelLocation, diagnostics))
+        r.meshPath = std::move(*mesh);
+    else
+        ok = false;
+    return resolveAfPose(r, diagnostics) && ok;
+}
 
-    // 3. The figure (af-format §7.2): idAFEntity_Base reads "articulatedFigure", idActor reads "ragdoll";
-    //    idAF::Load strips any extension before looking the decl up.
+// idAF::Load asks for GetAnim("af_pose"): every anim whose alias is af_pose (af_pose, af_pose1, …), one
+// picked at random when there are several. Sets r.afPoseAnim and r.afPosePath from r.model.
+bool Library::resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) const {
+    std::vector<const ModelAnim*> poses;
+    for (const ModelAnim& a : r.model.anims)
+        if (a.alias() == "af_pose") poses.push_back(&a);
+    if (poses.empty()) {
+        diagnostics.error(r.modelLocation,
+                          "model decl " + r.modelName + " has no anim af_pose (a ragdoll needs it)");
+        return false;
+    }
+    const ModelAnim* pose = r.model.findAnim("af_pose");
+    if (!pose) pose = poses.front();
+    if (poses.size() > 1)
+        diagnostics.warning(pose->location,
+                            "model decl " + r.modelName + " has " + std::to_string(poses.size()) +
+                                " af_pose variants (the engine picks one at random); using '" + pose->name +
+                                "'");
+    r.afPoseAnim = pose->name;
+    auto path = contentPath(pose->files.front(), "af_pose anim", pose->location, diagnostics);
+    if (!path) return false;
+    r.afPosePath = std::move(*path);
+    return true;
+}
+
+// The figure (af-format §7.2): idAFEntity_Base reads "articulatedFigure", idActor reads "ragdoll"; idAF::Load
+// strips any extension before looking the decl up.
+bool Library::resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r,
+                                  text::Diagnostics& diagnostics) const {
+    const std::string where = "entityDef '" + entity.name + "'";
     const std::optional<std::string> afKey = nonEmpty(r.get("articulatedFigure"));
     const std::optional<std::string> ragdollKey = nonEmpty(r.get("ragdoll"));
     if (!afKey && !ragdollKey) {
         diagnostics.error(entity.location, where +
                                                " has neither \"articulatedFigure\" nor \"ragdoll\": it names "
                                                "no figure");
-        ok = false;
-    } else {
-        r.figureKey = afKey ? "articulatedFigure" : "ragdoll";
-        const std::string value = afKey ? *afKey : *ragdollKey;
-        const std::string figure = stripExtension(value);
-        if (afKey && ragdollKey && !text::equalsIgnoreCase(figure, stripExtension(*ragdollKey)))
-            diagnostics.warning(entity.location,
-                                where + " sets both \"articulatedFigure\" '" + *afKey +
-                                    "' and \"ragdoll\" '" + *ragdollKey +
-                                    "'; using \"articulatedFigure\" (AF entities read it, actors "
-                                    "read \"ragdoll\")");
-        if (const auto found = findFigure(figure)) {
-            r.figureName = found->decl.name;
-            r.figureLocation = found->decl.location;
-            r.figureFile = found->file;
-        } else {
-            diagnostics.error(entity.location, "articulatedFigure '" + figure + "' (\"" + r.figureKey +
-                                                   "\" '" + value + "' of " + where + ") not found in af/");
-            ok = false;
-        }
+        return false;
     }
-
-    if (!ok) return std::nullopt;
-    return r;
+    r.figureKey = afKey ? "articulatedFigure" : "ragdoll";
+    const std::string value = afKey ? *afKey : *ragdollKey;
+    const std::string figure = stripExtension(value);
+    if (afKey && ragdollKey && !text::equalsIgnoreCase(figure, stripExtension(*ragdollKey)))
+        diagnostics.warning(entity.location,
+                            where + " sets both \"articulatedFigure\" '" + *afKey + "' and \"ragdoll\" '" +
+                                *ragdollKey +
+                                "'; using \"articulatedFigure\" (AF entities read it, actors "
+                                "read \"ragdoll\")");
+    const auto found = findFigure(figure);
+    if (!found) {
+        diagnostics.error(entity.location, "articulatedFigure '" + figure + "' (\"" + r.figureKey + "\" '" +
+                                               value + "' of " + where + ") not found in af/");
+        return false;
+    }
+    r.figureName = found->decl.name;
+    r.figureLocation = found->decl.location;
+    r.figureFile = found->file;
+    return true;
 }
 
 // A path from a decl, relative to the content folder, made absolute; the file must exist and the path must

@@ -2,6 +2,7 @@
 #include <limits>
 
 #include "afb/figure/Collision.h"
+#include "afb/figure/Polytope.h"
 
 namespace afb::figure {
 
@@ -47,14 +48,10 @@ void addAxes(const FigureBody& b, const std::vector<Eigen::Vector3d>& world, std
              std::vector<Eigen::Vector3d>& edges) {
     for (const std::vector<int>& face : b.shape.faces) {
         if (face.size() < 2) continue;
-        Eigen::Vector3d n = Eigen::Vector3d::Zero();
-        for (std::size_t k = 0; k < face.size(); ++k) {
-            const Eigen::Vector3d& p = world[static_cast<std::size_t>(face[k])];
-            const Eigen::Vector3d& q = world[static_cast<std::size_t>(face[(k + 1) % face.size()])];
-            n += p.cross(q);
-            edges.push_back(q - p);
-        }
-        if (n.norm() > 0) normals.push_back(n.normalized());
+        for (std::size_t k = 0; k < face.size(); ++k)
+            edges.push_back(world[static_cast<std::size_t>(face[(k + 1) % face.size()])] -
+                            world[static_cast<std::size_t>(face[k])]);
+        if (const std::optional<Eigen::Vector3d> n = faceNormal(world, face)) normals.push_back(*n);
     }
 }
 

@@ -2,8 +2,10 @@
 // face loops are our own, each counter-clockwise seen from outside.
 #include "afb/figure/Polytope.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace afb::figure {
@@ -76,6 +78,39 @@ int Polytope::edgeCount() const {
     std::size_t uses = 0;
     for (const auto& face : faces) uses += face.size();
     return static_cast<int>(uses / 2);
+}
+
+std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices,
+                                          std::span<const int> face) {
+    if (face.size() < 3) return std::nullopt;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < face.size(); ++k) {
+        const Eigen::Vector3d& p = vertices[static_cast<std::size_t>(face[k])];
+        const Eigen::Vector3d& q = vertices[static_cast<std::size_t>(face[(k + 1) % face.size()])];
+        n += p.cross(q);
+    }
+    if (!(n.norm() > 0.0)) return std::nullopt;
+    return n.normalized();
+}
+
+std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices,
+                                  std::span<const std::vector<int>> faces) {
+    std::vector<FacePlane> planes;
+    for (const std::vector<int>& face : faces) {
+        const std::optional<Eigen::Vector3d> n = faceNormal(vertices, face);
+        if (!n) continue;
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        for (int v : face) centre += vertices[static_cast<std::size_t>(v)];
+        centre /= static_cast<double>(face.size());
+        planes.push_back({*n, n->dot(centre)});
+    }
+    return planes;
+}
+
+double inRadius(std::span<const FacePlane> planes) {
+    double r = std::numeric_limits<double>::infinity();
+    for (const FacePlane& plane : planes) r = std::min(r, plane.offset);
+    return r;
 }
 
 int effectiveCylinderSides(int requested) {

@@ -7,8 +7,10 @@
 #include <memory>
 
 #include "FigureFixture.h"
+#include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/figure/Limits.h"
 #include "afb/sim/Scene.h"
 
 namespace {
@@ -156,6 +158,45 @@ TEST_CASE("ballAndSocketJoint pyramid limit: a true pyramid, corners included", 
         const auto [toL, toU] = planar(scene);
         CHECK(toU == Approx(-30).margin(1.0));
     }
+}
+
+TEST_CASE("direction limit rows: their excess is figure::limitExcessRad's, cone and pyramid",
+          "[bullet][constraints]") {
+    // The solver's rows compute the excess in btScalar for their Jacobians; the figure's one definition must
+    // agree.
+    using afb::bullet::DirectionLimitConstraint;
+    using Eigen::AngleAxisd;
+    using Eigen::Matrix3d;
+    using Eigen::Vector3d;
+    btSphereShape sphere(1);
+    btRigidBody a(btRigidBody::btRigidBodyConstructionInfo(1, nullptr, &sphere, btVector3(1, 1, 1)));
+    btRigidBody b(btRigidBody::btRigidBodyConstructionInfo(1, nullptr, &sphere, btVector3(1, 1, 1)));
+    const Vector3d shaft = Vector3d(0.2, 1, -0.3).normalized();
+    const Matrix3d basis = AngleAxisd(0.7, Vector3d(1, -2, 0.5).normalized()).matrix(); // f, l, u in body b
+    afb::figure::FigureConstraint cone, pyramid;
+    cone.limit = afb::figure::ConeLimit{basis.col(0), shaft, 25 * kDeg};
+    pyramid.limit = afb::figure::PyramidLimit{basis, shaft, 30 * kDeg, 20 * kDeg};
+    DirectionLimitConstraint coneRows(a, b, afb::bullet::toBt(shaft), afb::bullet::toBt(basis),
+                                      DirectionLimitConstraint::Shape::Cone, btScalar(25 * kDeg), 0);
+    DirectionLimitConstraint pyramidRows(a, b, afb::bullet::toBt(shaft), afb::bullet::toBt(basis),
+                                         DirectionLimitConstraint::Shape::Pyramid, btScalar(30 * kDeg),
+                                         btScalar(20 * kDeg));
+    const double tolerance = sizeof(btScalar) == sizeof(double) ? 1e-9 : 1e-4;
+    int exceeded = 0;
+    for (int i = 0; i < 24; ++i) {
+        const Matrix3d ra =
+            AngleAxisd(0.37 * i, Vector3d(std::sin(i), 1, std::cos(2.0 * i)).normalized()).matrix();
+        const Matrix3d rb = AngleAxisd(-0.21 * i, Vector3d(1, std::cos(i), 0.5).normalized()).matrix();
+        a.setCenterOfMassTransform(btTransform(afb::bullet::toBt(ra)));
+        b.setCenterOfMassTransform(btTransform(afb::bullet::toBt(rb)));
+        INFO("pose " << i);
+        CHECK(double(coneRows.violation()) ==
+              Approx(afb::figure::limitExcessRad(cone, ra, rb)).margin(tolerance));
+        CHECK(double(pyramidRows.violation()) ==
+              Approx(afb::figure::limitExcessRad(pyramid, ra, rb)).margin(tolerance));
+        if (afb::figure::limitExcessRad(pyramid, ra, rb) > 0) ++exceeded;
+    }
+    CHECK(exceeded > 6); // the poses test the excess, not only the inside
 }
 
 TEST_CASE("universalJoint: cone limit on shaft 1, no relative spin, spin is transmitted", "[bullet][constraints]") {

@@ -199,7 +199,7 @@ void checkSpawnPose(const std::string& name, const Figure& figure) {
     // §4.1: every constraint is exactly satisfied at spawn, so its two frames coincide in the world.
     for (int i = 0; i < static_cast<int>(figure.constraints.size()); ++i) {
         const figure::FigureConstraint& c = figure.constraints[static_cast<std::size_t>(i)];
-        if (c.type == decl::ConstraintType::Spring) continue;
+        if (c.type == figure::JointType::Spring) continue;
         INFO(name << " constraint " << c.name);
         const auto [a, b] = ragdoll.constraintFramesWorld(i);
         CHECK((bullet::toEigen(a.getOrigin()) - bullet::toEigen(b.getOrigin())).norm() <= 1e-5);

@@ -652,15 +652,15 @@ TEST_CASE("figure: settings are captured in parse order (§1.8, §8 item 3)", "[
     CHECK(p.linearFrictionPerStep == Approx(0.01));
     CHECK(p.angularFrictionPerStep == Approx(0.01));
     CHECK(p.contactFriction == Approx(0.8));
-    CHECK(p.contents == decl::kContentsCorpse);
-    CHECK(p.clipMask == (decl::kContentsSolid | decl::kContentsCorpse | decl::kContentsMoveableClip));
+    CHECK(p.contents == figure::kContentsCorpse);
+    CHECK(p.clipMask == (figure::kContentsSolid | figure::kContentsCorpse | figure::kContentsMoveableClip));
     CHECK(p.selfCollision);
     const FigureBody& c = b.body("chest");
     CHECK(c.linearFrictionPerStep == Approx(0.1));
     CHECK(c.angularFrictionPerStep == Approx(0.2));
     CHECK(c.contactFriction == Approx(0.3));
-    CHECK(c.contents == decl::kContentsBody);
-    CHECK(c.clipMask == (decl::kContentsSolid | decl::kContentsMoveableClip)); // MOVEABLECLIP always added
+    CHECK(c.contents == figure::kContentsBody);
+    CHECK(c.clipMask == (figure::kContentsSolid | figure::kContentsMoveableClip)); // MOVEABLECLIP always added
     CHECK_FALSE(c.selfCollision);
     CHECK_FALSE(b.figure->selfCollision); // the switch is the final settings value
 }
@@ -711,7 +711,7 @@ TEST_CASE("figure: constraint frames coincide at the load pose for every constra
         CHECK(isRotation(c.frameInBody1.rotation));
         CHECK(isRotation(c.frameInBody2.rotation));
         const auto [a, w] = framesModel(f, c);
-        if (c.type == decl::ConstraintType::Spring) continue; // anchors differ by design, checked below
+        if (c.type == figure::JointType::Spring) continue; // anchors differ by design, checked below
         CHECK(near(a.position, w.position, kTight));
         CHECK(near(a.rotation, w.rotation, kTight));
     }
@@ -749,7 +749,7 @@ TEST_CASE("figure: constraint frames coincide at the load pose for every constra
     // §4.1: every type but spring disables collision between its bodies.
     for (const FigureConstraint& c : f.constraints) {
         INFO(c.name);
-        CHECK(c.disablesCollision == (c.type != decl::ConstraintType::Spring));
+        CHECK(c.disablesCollision == (c.type != figure::JointType::Spring));
     }
 }
 
@@ -1023,7 +1023,7 @@ TEST_CASE("figure findings: unknown contents names end the list (§1.6)", "[figu
     INFO(b.findings.str());
     REQUIRE(b.figure);
     CHECK(b.hasWarning("body \"head\"", "trigger"));
-    CHECK(b.body("head").contents == decl::kContentsCorpse);
+    CHECK(b.body("head").contents == figure::kContentsCorpse);
 }
 
 TEST_CASE("figure findings: joints contained by no body or by two (§5.3)", "[figure]") {
@@ -1130,6 +1130,31 @@ TEST_CASE("figure findings: mass outside [1, 100], mass ratio above 10:1, inerti
     REQUIRE(r.figure);
     // small: 4, pelvis: 50 → 12.5:1.
     CHECK(r.hasWarning("ballAndSocketJoint \"ratio\"", "10:1"));
+}
+
+TEST_CASE("figure findings: limits the load pose already exceeds (§4.3, §4.5)", "[figure]") {
+    // The chest is turned (yaw 90°): the lint measures on the built frames, which must not matter.
+    const Built b = build(R"(articulatedFigure t {
+	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 40 ) }
+	body "chest" { joint "Spine" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 60 ) angles ( 0, 90, 0 ) }
+	ballAndSocketJoint "coneIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) coneLimit ( 0, 0, 1 ), 60, ( 0, 0.5, 1 ) }
+	ballAndSocketJoint "coneOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) coneLimit ( 0, 0, 1 ), 60, ( 0, 1, 1 ) }
+	ballAndSocketJoint "pyrIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) pyramidLimit ( 1, 0, 0 ), 60, 40, 0, ( 1, 0.5, 0.3 ) }
+	ballAndSocketJoint "pyrOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) pyramidLimit ( 1, 0, 0 ), 60, 40, 0, ( 1, 0, 0.5 ) }
+	hinge "hingeIn" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) limit 30, 90, 0 }
+	hinge "hingeOut" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) limit 0, 60, 60 }
+	ballAndSocketJoint "worldOut" { body1 "pelvis" body2 "world" anchor ( 0, 0, 40 ) coneLimit ( 1, 0, 0 ), 20, ( 0, 0, 1 ) }
+}
+)");
+    INFO(b.findings.str());
+    REQUIRE(b.figure);
+    CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"coneIn\"", "starts"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"coneOut\"", "starts 45 deg from the cone axis, outside the half-angle 30"));
+    CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"pyrIn\"", "starts"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"pyrOut\"", "deg from its axis; limits 30, 20 deg"));
+    CHECK_FALSE(b.hasWarning("hinge \"hingeIn\"", "excludes"));
+    CHECK(b.hasWarning("hinge \"hingeOut\"", "[30, 90] deg excludes the load pose"));
+    CHECK(b.hasWarning("ballAndSocketJoint \"worldOut\"", "starts 90 deg from the cone axis"));
 }
 
 TEST_CASE("figure findings: self-colliding bodies that overlap or touch at the load pose", "[figure]") {

@@ -309,3 +309,43 @@ TEST_CASE("bone frame: columns are the body axes, right-handed, Z along the bone
         CHECK(boneFrame({1, 2, 3}, {1, 2, 3}) == Eigen::Matrix3d::Identity());
     }
 }
+
+TEST_CASE("face normals, face planes and the in-radius about the origin", "[figure][shapes]") {
+    using afb::figure::FacePlane;
+    // A box from (−1, −2, −3) to (3, 2, 3): the origin is 1 from the −X face, 2 from ±Y, 3 from the rest.
+    const Polytope box = afb::figure::makeBox({-1, -2, -3}, {3, 2, 3});
+    const std::vector<FacePlane> planes = afb::figure::facePlanes(box.vertices, box.faces);
+    REQUIRE(planes.size() == 6);
+    std::map<std::pair<int, int>, double> offsetByAxis; // (axis, sign) → offset
+    for (const FacePlane& p : planes) {
+        int axis = 0;
+        p.normal.cwiseAbs().maxCoeff(&axis);
+        CHECK(std::abs(p.normal[axis]) == Approx(1.0).margin(1e-15));
+        offsetByAxis[{axis, p.normal[axis] > 0 ? 1 : -1}] = p.offset;
+        for (int v : box.faces[static_cast<std::size_t>(&p - planes.data())])
+            CHECK(p.normal.dot(box.vertices[static_cast<std::size_t>(v)]) == Approx(p.offset).margin(1e-12));
+    }
+    CHECK(offsetByAxis.at({0, -1}) == Approx(1));
+    CHECK(offsetByAxis.at({0, 1}) == Approx(3));
+    CHECK(offsetByAxis.at({1, -1}) == Approx(2));
+    CHECK(offsetByAxis.at({1, 1}) == Approx(2));
+    CHECK(offsetByAxis.at({2, -1}) == Approx(3));
+    CHECK(offsetByAxis.at({2, 1}) == Approx(3));
+    CHECK(afb::figure::inRadius(planes) == Approx(1));
+
+    // Every face of every shape points outward: its normal agrees with centroid − (an interior point).
+    const Polytope dodecahedron = afb::figure::makeDodecahedron({-1, -2, -3}, {2, 2, 1});
+    for (const std::vector<int>& face : dodecahedron.faces) {
+        const auto n = afb::figure::faceNormal(dodecahedron.vertices, face);
+        REQUIRE(n);
+        CHECK(n->norm() == Approx(1.0));
+        CHECK(n->dot(dodecahedron.vertices[static_cast<std::size_t>(face[0])] - vertexMean(dodecahedron)) > 0);
+    }
+
+    // Degenerate faces have no normal and no plane; no plane at all means an unbounded in-radius.
+    const std::vector<Vector3d> points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+    CHECK_FALSE(afb::figure::faceNormal(points, std::vector<int>{0, 1}));
+    CHECK_FALSE(afb::figure::faceNormal(points, std::vector<int>{0, 1, 2})); // collinear: zero area
+    CHECK(afb::figure::facePlanes(points, std::vector<std::vector<int>>{{0, 1, 2}}).empty());
+    CHECK(std::isinf(afb::figure::inRadius({})));
+}

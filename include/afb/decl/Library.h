@@ -142,6 +142,12 @@ class Library {
     Library() = default;
     void indexFile(const AfSource& source, std::size_t fileIndex, text::Diagnostics& diagnostics);
     void indexFile(const DefSource& source, std::size_t fileIndex, text::Diagnostics& diagnostics);
+    // resolveEntity's steps; each reports its own errors and returns false when it found one.
+    bool mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const;
+    bool resolveEntityModel(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const;
+    bool resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) const;
+    bool resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r,
+                             text::Diagnostics& diagnostics) const;
     std::optional<std::filesystem::path> contentPath(const std::string& relative, const std::string& what,
                                                      const SourceLocation& where,
                                                      text::Diagnostics& diagnostics) const;

@@ -11,6 +11,7 @@
 #include "afb/decl/Af.h"
 #include "afb/figure/Skeleton.h"
 #include "afb/figure/Transform.h"
+#include "afb/figure/Vocabulary.h"
 #include "afb/text/Diagnostics.h"
 
 namespace afb::figure {
@@ -30,7 +31,7 @@ enum class JointMod : std::uint8_t { Orientation, Position, Both };
 
 /// A body's collision geometry in its body frame (centre of mass, principal axes), metres.
 struct BodyShape {
-    decl::ShapeKind kind = decl::ShapeKind::Box;
+    ShapeType kind = ShapeType::Box;
     std::vector<Eigen::Vector3d> vertices;      ///< the engine's exact polytope, body frame, metres
     std::vector<std::vector<int>> faces;        ///< outward counter-clockwise vertex loops
     /// Set when the shape is a box whose axes are the principal axes: its half extents, metres.
@@ -59,8 +60,8 @@ struct FigureBody {
     double angularDamping = 0;            ///< likewise for angular velocity
     double contactFriction = 0.8;         ///< Coulomb coefficient; pairs combine by minimum (§4.8)
     bool selfCollision = true;            ///< the body's own flag (§6.2)
-    std::uint32_t contents = decl::kContentsCorpse;                            ///< contents bits (§1.6)
-    std::uint32_t clipMask = decl::kContentsSolid | decl::kContentsCorpse | decl::kContentsMoveableClip;
+    std::uint32_t contents = kContentsCorpse;                                  ///< contents bits (§1.6)
+    std::uint32_t clipMask = kContentsSolid | kContentsCorpse | kContentsMoveableClip;
     std::vector<int> containedJoints;     ///< md5 joints whose impacts this body takes (§5.3), ascending
     std::optional<Eigen::Vector3d> frictionDirection;     ///< body frame, unit; single-direction friction
     std::optional<Eigen::Vector3d> contactMotorDirection; ///< body frame, unit
@@ -106,7 +107,7 @@ struct SpringParams {
 struct FigureConstraint {
     std::string name;
     text::SourceLocation location;
-    decl::ConstraintType type = decl::ConstraintType::Fixed;
+    JointType type = JointType::Fixed;
     int body1 = 0;              ///< index into Figure::bodies
     int body2 = -1;             ///< index into Figure::bodies, or −1 for the world
     Transform frameInBody1;     ///< constraint frame in body1's frame, metres

@@ -3,6 +3,8 @@
 // Lengths are in whatever unit the caller passes (Doom units when built from a decl; the figure layer scales
 // afterwards). No Doom row-matrix math leaks out: `boneFrame` returns a standard column rotation.
 #include <Eigen/Geometry>
+#include <optional>
+#include <span>
 #include <vector>
 
 namespace afb::figure {
@@ -23,6 +25,28 @@ struct Polytope {
     /// face-vertex uses.
     int edgeCount() const;
 };
+
+/// The outward unit normal of one face loop over `vertices` (counter-clockwise seen from outside): the sum of
+/// the cross products of consecutive vertices (Newell's method, exact for planar loops), normalized. nullopt
+/// for a degenerate face (fewer than 3 vertices, or zero area).
+std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices,
+                                          std::span<const int> face);
+
+/// A face's plane: points p on it have normal · p = offset, points inside the polytope normal · p ≤ offset.
+struct FacePlane {
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< outward, unit
+    double offset = 0; ///< signed distance of the plane from the origin along `normal`, in the vertices' unit
+};
+
+/// The plane of every non-degenerate face (see faceNormal), through the face's vertex centroid, in face
+/// order.
+std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices,
+                                  std::span<const std::vector<int>> faces);
+
+/// The distance from the origin to the nearest of `planes` (for a body's polytope: the radius of the largest
+/// sphere about its centre of mass that fits inside); negative when the origin is outside, +infinity for
+/// none.
+double inRadius(std::span<const FacePlane> planes);
 
 /// A cylinder or cone build: the polytope plus what the engine's side clamps did to the requested count.
 struct ShapeBuild {
