@@ -252,6 +252,8 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
 
     // The first instance's pose, in its own model space (metres).
     const std::vector<figure::Transform> bodies = parts[0].firstBodies;
+    r.firstBodies = bodies;
+    r.firstSpawn = bullet::toEigen(perWorld[0][0]);
     const pose::SkeletonPose pose = pose::driveSkeleton(figure, bodies);
     const Eigen::Quaterniond qe(pose.entity.rotation);
     const double entity[7] = {pose.entity.position.x(), pose.entity.position.y(), pose.entity.position.z(),
