@@ -125,7 +125,7 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
     if (n > 0) drawRootMark(cr, panel.toPx(request.joints[0].position));
 }
 
-// A cone of half angle `halfAngle` about `axis` from `apex`: its rim and four generators, lightly filled.
+// A cone of half angle `halfAngle` about `axis` from `apex`: its rim and four generators.
 void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Vector3d& axis,
               double halfAngle, double length) {
     const auto [u, v] = perpendicular(axis);
