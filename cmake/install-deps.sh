@@ -14,6 +14,8 @@ packages=(
   nlohmann-json3-dev
   libbenchmark-dev
   gnuplot-nox
+  libcairo2-dev fonts-dejavu-core        # afb draw: 2D drawing, PNG and SVG output, a font for its labels
+  libexpat1-dev                          # tests: the SVG pictures parse as XML
 )
 
 missing=()

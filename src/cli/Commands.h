@@ -19,6 +19,8 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv);
 void addGoldenCommand(CLI::App& app, int& exitCode);
 /// Registers `afb inspect`.
 void addInspectCommand(CLI::App& app, int& exitCode);
+/// Registers `afb draw`.
+void addDrawCommand(CLI::App& app, int& exitCode);
 
 /// Prints every diagnostic to stderr as `file:line:col: error: message`.
 void printDiagnostics(const text::Diagnostics& diagnostics);

@@ -235,8 +235,9 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * worlds / r.bodies : 0;
 
     // The first instance's pose, in its own model space (metres).
-    r.finalBodies = parts[0].firstBodies;
-    const pose::SkeletonPose pose = pose::driveSkeleton(figure, r.finalBodies);
+    r.firstBodies = parts[0].firstBodies;
+    r.firstSpawn = bullet::toEigen(perWorld[0][0]);
+    const pose::SkeletonPose pose = pose::driveSkeleton(figure, r.firstBodies);
     const Eigen::Quaterniond qe(pose.entity.rotation);
     const double entity[7] = {pose.entity.position.x(), pose.entity.position.y(), pose.entity.position.z(),
                               qe.w(), qe.x(), qe.y(), qe.z()};

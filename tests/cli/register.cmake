@@ -48,6 +48,24 @@ afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision doub
 afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
 
+# afb draw: the humanoid as PNG and SVG, checked by afb_picture_check (signature, size, not blank; SVG parses), and
+# the drop pose at --at 0 drawn like the load pose.
+pkg_check_modules(AFB_EXPAT REQUIRED IMPORTED_TARGET expat)
+add_executable(afb_picture_check ${CMAKE_CURRENT_LIST_DIR}/picture_check.cpp)
+target_link_libraries(afb_picture_check PRIVATE PkgConfig::AFB_CAIRO PkgConfig::AFB_EXPAT)
+afb_warnings(afb_picture_check)
+add_test(NAME cli.draw_humanoid
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DAFB_DOUBLE=$<TARGET_FILE:afb-double>"
+          "-DCHECK=$<TARGET_FILE:afb_picture_check>"
+          "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/draw_humanoid"
+          -P ${CMAKE_CURRENT_LIST_DIR}/draw.cmake)
+afb_cli_test(draw_views 0 ARGS draw --base . chain --view top,front --show bodies,joints
+             --out ${CMAKE_CURRENT_BINARY_DIR}/draw_chain.svg MATCH "chain \\(load pose\\)")
+afb_cli_test(draw_bad_extension 1 ARGS draw --base . chain --out ${CMAKE_CURRENT_BINARY_DIR}/chain.jpg
+             MATCH "must be a .png or .svg file")
+afb_cli_test(draw_unknown 1 ARGS draw --base . no_such_entity --out ${CMAKE_CURRENT_BINARY_DIR}/none.png
+             MATCH "no_such_entity")
+
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)
   add_test(NAME cli.content_reproducible

@@ -53,7 +53,11 @@ struct DropResult {
     std::optional<double> settleTimeS;
     double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz
     std::vector<JointPose> finalPose;         ///< first instance, model space
-    std::vector<figure::Transform> finalBodies; ///< first instance's body frames, world, metres
+    /// First instance's body frames (centre of mass, principal axes) at the end of the run, world space, metres.
+    std::vector<figure::Transform> firstBodies;
+    /// First instance's entity transform at spawn, world space: firstSpawn⁻¹ ∘ firstBodies is the pose relative to
+    /// the spawn, equal to the bodies' load pose at step 0.
+    figure::Transform firstSpawn;
 };
 
 /// Runs one drop of `figure`. Deterministic for a given build, options and input.
