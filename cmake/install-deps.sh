@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   clang-14 libclang-rt-14-dev            # libFuzzer targets (fuzz preset)
+  clang-format-14                        # cmake/check-format.sh (CI's format check)
   libbullet-dev                          # float and -float64 builds of Bullet
   libeigen3-dev
   libassimp-dev
