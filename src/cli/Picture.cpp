@@ -42,19 +42,19 @@ const char* viewLabel(View view) {
     return "";
 }
 
-const char* typeLabel(decl::ConstraintType type) {
+const char* typeLabel(figure::JointType type) {
     switch (type) {
-    case decl::ConstraintType::Fixed:
+    case figure::JointType::Fixed:
         return "fixed";
-    case decl::ConstraintType::BallAndSocket:
+    case figure::JointType::BallAndSocket:
         return "ball and socket";
-    case decl::ConstraintType::Universal:
+    case figure::JointType::Universal:
         return "universal";
-    case decl::ConstraintType::Hinge:
+    case figure::JointType::Hinge:
         return "hinge";
-    case decl::ConstraintType::Slider:
+    case figure::JointType::Slider:
         return "slider";
-    case decl::ConstraintType::Spring:
+    case figure::JointType::Spring:
         return "spring";
     }
     return "";
@@ -152,8 +152,8 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
         items.push_back({[](cairo_t* cr, Vector2d at) { drawRootMark(cr, at + Vector2d(13, 0)); },
                          "root joint (entity origin)"});
     if (show.joints) {
-        for (int t = 0; t <= static_cast<int>(decl::ConstraintType::Spring); ++t) {
-            const auto type = static_cast<decl::ConstraintType>(t);
+        for (int t = 0; t <= static_cast<int>(figure::JointType::Spring); ++t) {
+            const auto type = static_cast<figure::JointType>(t);
             const auto n = std::count_if(figure.constraints.begin(), figure.constraints.end(),
                                          [&](const figure::FigureConstraint& c) { return c.type == type; });
             if (n == 0) continue;

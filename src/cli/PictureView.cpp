@@ -240,7 +240,7 @@ void drawAnchors(cairo_t* cr, const figure::Figure& figure, const PictureRequest
         const figure::FigureConstraint& c = figure.constraints[i];
         const Vector2d anchor1 =
             panel.toPx((request.bodies[static_cast<std::size_t>(c.body1)] * c.frameInBody1).position);
-        if (c.type == decl::ConstraintType::Spring) {
+        if (c.type == figure::JointType::Spring) {
             const Vector2d anchor2 = panel.toPx((body2Frame(request, c) * c.frameInBody2).position);
             setColour(cr, constraintColour(c.type));
             cairo_set_line_width(cr, 1.3);
@@ -394,49 +394,49 @@ void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& 
     cairo_restore(cr);
 }
 
-Rgb constraintColour(decl::ConstraintType type) {
+Rgb constraintColour(figure::JointType type) {
     switch (type) {
-    case decl::ConstraintType::Fixed:
+    case figure::JointType::Fixed:
         return {0.35, 0.35, 0.35};
-    case decl::ConstraintType::BallAndSocket:
+    case figure::JointType::BallAndSocket:
         return {0.84, 0.15, 0.16};
-    case decl::ConstraintType::Universal:
+    case figure::JointType::Universal:
         return {0.55, 0.30, 0.75};
-    case decl::ConstraintType::Hinge:
+    case figure::JointType::Hinge:
         return {0.10, 0.42, 0.80};
-    case decl::ConstraintType::Slider:
+    case figure::JointType::Slider:
         return {0.10, 0.60, 0.25};
-    case decl::ConstraintType::Spring:
+    case figure::JointType::Spring:
         return {0.95, 0.50, 0.05};
     }
     return {};
 }
 
-void drawAnchorMark(cairo_t* cr, decl::ConstraintType type, const Vector2d& at) {
+void drawAnchorMark(cairo_t* cr, figure::JointType type, const Vector2d& at) {
     const double r = kMarkPx, x = at.x(), y = at.y();
     cairo_new_path(cr);
     switch (type) {
-    case decl::ConstraintType::BallAndSocket:
-    case decl::ConstraintType::Spring:
+    case figure::JointType::BallAndSocket:
+    case figure::JointType::Spring:
         cairo_arc(cr, x, y, r, 0, 2 * kPi);
         break;
-    case decl::ConstraintType::Universal:
+    case figure::JointType::Universal:
         cairo_move_to(cr, x, y - r * 1.25);
         cairo_line_to(cr, x + r * 1.25, y);
         cairo_line_to(cr, x, y + r * 1.25);
         cairo_line_to(cr, x - r * 1.25, y);
         cairo_close_path(cr);
         break;
-    case decl::ConstraintType::Hinge:
+    case figure::JointType::Hinge:
         cairo_rectangle(cr, x - r, y - r, 2 * r, 2 * r);
         break;
-    case decl::ConstraintType::Slider:
+    case figure::JointType::Slider:
         cairo_move_to(cr, x, y - r * 1.2);
         cairo_line_to(cr, x + r * 1.1, y + r * 0.8);
         cairo_line_to(cr, x - r * 1.1, y + r * 0.8);
         cairo_close_path(cr);
         break;
-    case decl::ConstraintType::Fixed:
+    case figure::JointType::Fixed:
         cairo_move_to(cr, x - r, y - r * 0.35);
         for (const auto& [px, py] : std::array<std::pair<double, double>, 11>{{{-0.35, -0.35},
                                                                                {-0.35, -1},

@@ -52,9 +52,9 @@ void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& 
                const PanelMapping& panel, const PanelStyle& style);
 
 /// The colour that marks constraints of `type` (anchors and limits).
-Rgb constraintColour(decl::ConstraintType type);
+Rgb constraintColour(figure::JointType type);
 /// The anchor mark of a constraint of `type`, centred on `at` (pixels); also used by the legend.
-void drawAnchorMark(cairo_t* cr, decl::ConstraintType type, const Eigen::Vector2d& at);
+void drawAnchorMark(cairo_t* cr, figure::JointType type, const Eigen::Vector2d& at);
 /// The fill colour of body `index`.
 Rgb bodyColour(std::size_t index);
 /// The md5 root joint's mark (the entity origin), centred on `at` (pixels).

@@ -23,6 +23,7 @@ enum class CcdPolicy {
 };
 
 /// Every knob of how a figure is stepped. A plain, comparable value: copy it, change a field, pass it on.
+/// Default-constructed, it is the "default" preset.
 struct Method {
     /// The preset the value started from ("default", "fast", …), for reports; overrides do not rename it.
     std::string name = "default";
@@ -32,7 +33,7 @@ struct Method {
     /// Substeps per frame: each frame of dt is stepped as `substeps` steps of dt / substeps.
     int substeps = 1;
     /// Sequential-impulse iterations of the world's solver (contacts, and joints without their own count).
-    int iterations = 10;
+    int iterations = 20;
     /// Bullet's split impulse: contact penetration is recovered by a separate position-only impulse that adds
     /// no velocity (no bounce out of the ground); off, penetration is recovered by Baumgarte velocity.
     bool splitImpulse = true;
@@ -48,17 +49,17 @@ struct Method {
     /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
     /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world.
-    int positionIterations = 0;
-    /// Contact manifolds filled at first touch: Bullet's convex–plane and convex–convex algorithms find one
-    /// point per step by default, so a box landing flat is held at one corner and tips into the ground by up
-    /// to a step's travel; on, they add perturbed points until the manifold has three. Sets the world's
-    /// btDefaultCollisionConfiguration (for every convex body in it, the game's too).
-    bool multipointContacts = false;
+    int positionIterations = 4;
+    /// Contact manifolds filled at first touch on planes: Bullet's convex–plane algorithm finds one point per
+    /// step by default, so a box landing flat is held at one corner and tips into the ground by up to a step's
+    /// travel; on, it adds perturbed points until the manifold has three. Sets the world's
+    /// btDefaultCollisionConfiguration (for every convex body against a plane in it, the game's too).
+    bool multipointContacts = true;
     /// Speculative contacts: Bullet keeps a ragdoll body's contacts from as far as the body can travel in one
     /// substep, so the solver stops an approaching body at the surface instead of finding it inside one step
     /// later (Bullet treats contacts at a positive distance as speculative). Runs where a RagdollWorld manages
     /// the world; the engine's restitution then applies only to touching contacts.
-    bool speculativeContacts = false;
+    bool speculativeContacts = true;
 
     // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
     /// Solver iterations of the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
@@ -69,14 +70,15 @@ struct Method {
     /// Speculative limits: a limit row exists before the limit is reached and lets the joint close only the gap
     /// that remains in this step (Box2D v3's joint limits), instead of a row that appears after the overshoot.
     /// Cone and hinge limits then use afbullet's own rows instead of btConeTwist's and btHinge's.
-    bool speculativeLimits = false;
+    bool speculativeLimits = true;
     /// Continuous collision policy.
     CcdPolicy ccd = CcdPolicy::FastBodies;
 
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets, fast to exact: "fast", "default", "accurate", "exact".
+/// The named presets, fast to exact: "fast", "default", "accurate", "exact", and "legacy" (afbullet 0.1's
+/// method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for comparison).
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);

@@ -1,0 +1,77 @@
+// Accuracy regression per method preset (README "Methods"): deterministic drops of the bundled humanoid with
+// bounds on the metrics, and every bundled figure dropped with the default method without exploding.
+// The bounds sit above what each preset measures today and below what the next cheaper one gives, so a change
+// that loses a preset's accuracy fails here (timings are never asserted).
+#include <catch2/catch.hpp>
+
+#include "TestSupport.h"
+#include "afb/bullet/Method.h"
+#include "afb/decl/Library.h"
+#include "afb/figure/Load.h"
+#include "afb/sim/Drop.h"
+
+namespace {
+
+afb::figure::Figure bundled(const std::string& entity) {
+    afb::text::Diagnostics diags;
+    std::optional<afb::figure::LoadedFigure> loaded;
+    if (auto lib = afb::decl::Library::open(afb::test::sourceDir(), diags))
+        loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
+    INFO(diags.str());
+    REQUIRE(loaded);
+    return loaded->figure;
+}
+
+struct Bounds {
+    const char* preset;
+    double anchorM, limitDeg, restPenetrationM;
+};
+
+} // namespace
+
+TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", "[sim][presets]") {
+    const afb::figure::Figure humanoid = bundled("humanoid");
+    // Bounds on the 3 s drop of one humanoid (yaw 0) at 60 Hz; "legacy" is the method before presets existed
+    // (world iterations 10, joints 20, no extras), kept as the reference the presets must beat.
+    const Bounds bounds[] = {
+        {"fast", 0.035, 18, 0.01},
+        {"default", 0.025, 11, 0.01},
+        {"accurate", 0.028, 20, 0.01},
+        {"exact", 0.024, 11, 0.01},
+    };
+    afb::sim::DropOptions o;
+    o.heightM = 1.0;
+    o.seconds = 3.0;
+    o.sleeping = false;
+    o.method = *afb::bullet::methodPreset("legacy");
+    const afb::sim::DropResult reference = afb::sim::runDrop(humanoid, o);
+    for (const Bounds& b : bounds) {
+        DYNAMIC_SECTION(b.preset) {
+            o.method = *afb::bullet::methodPreset(b.preset);
+            const afb::sim::DropResult r = afb::sim::runDrop(humanoid, o);
+            INFO(afb::bullet::describe(o.method));
+            INFO("anchor " << r.maxAnchorErrorM << " m at " << r.worstAnchorJoint << ", limit " << r.maxLimitViolationDeg
+                           << " deg at " << r.worstLimitJoint << ", rest penetration " << r.restPenetrationM
+                           << " m; legacy: anchor " << reference.maxAnchorErrorM << " m, limit "
+                           << reference.maxLimitViolationDeg << " deg");
+            CHECK_FALSE(r.exploded);
+            CHECK(r.maxAnchorErrorM < b.anchorM);
+            CHECK(r.maxLimitViolationDeg < b.limitDeg);
+            CHECK(r.restPenetrationM < b.restPenetrationM);
+            CHECK(r.maxAnchorErrorM < reference.maxAnchorErrorM);
+        }
+    }
+}
+
+TEST_CASE("presets: every bundled figure drops from 1 m with the default method without exploding",
+          "[sim][presets]") {
+    for (const char* entity : {"humanoid", "props", "buggy", "lamp", "chain"}) {
+        afb::sim::DropOptions o;
+        o.count = 4; // four yaws, as cmake/demo.sh drops them
+        o.seconds = 3.0;
+        o.method = *afb::bullet::methodPreset("default");
+        const afb::sim::DropResult r = afb::sim::runDrop(bundled(entity), o);
+        INFO(entity << ": anchor " << r.maxAnchorErrorM << " m, speed " << r.maxSpeedMps << " m/s");
+        CHECK_FALSE(r.exploded);
+    }
+}
