@@ -34,8 +34,8 @@ btVector3 anyPerpendicular(const btVector3& v) {
 // because the solver works in btScalar: routing the angle through Eigen's doubles would change the float
 // build's solution.
 
-int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape shape, btScalar half1,
-                       btScalar half2, btScalar margin, LimitRow rows[2]) {
+int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape shape, btScalar half1, btScalar half2,
+                       btScalar margin, LimitRow rows[2]) {
     const btVector3 f = basis.getColumn(0), l = basis.getColumn(1), u = basis.getColumn(2);
     int n = 0;
     if (shape == LimitShape::Cone) {
@@ -66,8 +66,8 @@ int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape 
     return n;
 }
 
-int hingeRangeRow(const btMatrix3x3& frameA, const btMatrix3x3& frameB, btScalar lower, btScalar upper,
-                  btScalar margin, LimitRow& row) {
+int hingeRangeRow(const btMatrix3x3& frameA, const btMatrix3x3& frameB, btScalar lower, btScalar upper, btScalar margin,
+                  LimitRow& row) {
     // φ: rotation of frame A relative to frame B about B's Z; dφ/dt = (ωA − ωB)·z.
     const btMatrix3x3 rel = frameB.transpose() * frameA;
     const btScalar phi = btAtan2(rel[1][0], rel[0][0]);
@@ -180,8 +180,8 @@ void JointFrictionConstraint::getInfo2(btConstraintInfo2* info) {
 
 // --- SpringConstraint -----------------------------------------------------------------------------------------
 
-SpringConstraint::SpringConstraint(btRigidBody& a, btRigidBody& b, const btVector3& anchorInA, const btVector3& anchorInB,
-                                   const Params& params)
+SpringConstraint::SpringConstraint(btRigidBody& a, btRigidBody& b, const btVector3& anchorInA,
+                                   const btVector3& anchorInB, const Params& params)
     : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_anchorA(anchorInA), m_anchorB(anchorInB), m_params(params) {}
 
 SpringConstraint::State SpringConstraint::state() const {

@@ -137,8 +137,8 @@ void projectLimitRow(Side& a, Side& b, const LimitRow& row) {
     applyAngular(a, b, row.axisWorld * (-row.excess / w));
 }
 
-void projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const btTransform& fa,
-                  const btTransform& fb, const btMatrix3x3& body2Basis) {
+void projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const btTransform& fa, const btTransform& fb,
+                  const btMatrix3x3& body2Basis) {
     LimitRow rows[2];
     int n = 0;
     const btMatrix3x3 body1Basis = a.body ? a.body->getCenterOfMassTransform().getBasis() : btMatrix3x3::getIdentity();

@@ -174,8 +174,9 @@ Ragdoll::JointError Ragdoll::jointError(int i) const {
     }
     // One definition of a limit's excess (figure/Limits.h), in double, for every backend's metrics.
     const btMatrix3x3 body1 = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform().getBasis();
-    const btMatrix3x3 body2 = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform().getBasis()
-                                           : m_spawn.getBasis();
+    const btMatrix3x3 body2 = c.body2 >= 0
+                                  ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform().getBasis()
+                                  : m_spawn.getBasis();
     e.limitExcessRad = figure::limitExcessRad(c, toEigen(body1), toEigen(body2));
     return e;
 }
@@ -199,7 +200,7 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
         b.setInterpolationLinearVelocity(toBt(states[i].linearVelocity));
         b.setInterpolationAngularVelocity(toBt(states[i].angularVelocity));
         m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
-                                                                                 m_world.getDispatcher());
+                                                                                m_world.getDispatcher());
     }
     wake();
     return true;
@@ -280,10 +281,11 @@ btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
 
 std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
     const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
-    const btTransform a = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * toBt(c.frameInBody1);
-    const btTransform b = c.body2 >= 0
-                              ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * toBt(c.frameInBody2)
-                              : frameOfBody2(c);
+    const btTransform a =
+        m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * toBt(c.frameInBody1);
+    const btTransform b =
+        c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * toBt(c.frameInBody2)
+                     : frameOfBody2(c);
     return {a, b};
 }
 
@@ -344,8 +346,8 @@ void Ragdoll::addConstraints() {
             ct->setLimit(SIMD_PI, SIMD_PI, 0);
             main = std::move(ct);
             frictionRows = 2;
-            frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2], 0,
-                                  fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
+            frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2],
+                                  0, fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
             break;
         }
         case JointType::Hinge: {
@@ -385,16 +387,18 @@ void Ragdoll::addConstraints() {
         // Pyramid limits (ball) and every universal limit: our direction-limit rows.
         if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
             if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1), b2Rot * toBt(p->basisInBody2),
+                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1),
+                                                                   b2Rot * toBt(p->basisInBody2),
                                                                    DirectionLimitConstraint::Shape::Pyramid,
                                                                    static_cast<btScalar>(p->halfAngle1Rad),
                                                                    static_cast<btScalar>(p->halfAngle2Rad), policy);
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
             if (cone && c.type == JointType::Universal)
-                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
-                                                                   basisWithX(b2Rot * toBt(cone->axisInBody2)),
-                                                                   DirectionLimitConstraint::Shape::Cone,
-                                                                   static_cast<btScalar>(cone->halfAngleRad), 0, policy);
+                limit =
+                    std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
+                                                               basisWithX(b2Rot * toBt(cone->axisInBody2)),
+                                                               DirectionLimitConstraint::Shape::Cone,
+                                                               static_cast<btScalar>(cone->halfAngleRad), 0, policy);
         }
 
         m_main.push_back(main.get());
@@ -432,8 +436,10 @@ void Ragdoll::filterPairs() {
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {
             if (std::binary_search(colliding.begin(), colliding.end(), std::make_pair(i, j))) continue;
-            m_bodies[static_cast<std::size_t>(i)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(j)].get(), true);
-            m_bodies[static_cast<std::size_t>(j)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(i)].get(), true);
+            m_bodies[static_cast<std::size_t>(i)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(j)].get(),
+                                                                           true);
+            m_bodies[static_cast<std::size_t>(j)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(i)].get(),
+                                                                           true);
         }
 }
 

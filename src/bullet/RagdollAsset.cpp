@@ -1,9 +1,9 @@
 #include "afb/bullet/RagdollAsset.h"
 
-#include <LinearMath/btGeometryUtil.h>
-
 #include <algorithm>
 #include <cmath>
+
+#include <LinearMath/btGeometryUtil.h>
 
 #include "afb/bullet/Convert.h"
 #include "afb/figure/Polytope.h"
@@ -27,8 +27,7 @@ btAlignedObjectArray<btVector3> btPlanes(const std::vector<figure::FacePlane>& f
 std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) {
     std::shared_ptr<RagdollAsset> asset(new RagdollAsset(std::move(figure)));
     for (const figure::FigureBody& body : asset->m_figure.bodies) {
-        const std::vector<figure::FacePlane> faces =
-            figure::facePlanes(body.shape.vertices, body.shape.faces);
+        const std::vector<figure::FacePlane> faces = figure::facePlanes(body.shape.vertices, body.shape.faces);
         const btAlignedObjectArray<btVector3> planes = btPlanes(faces);
         // COM (the body origin) to the nearest face, rounded to btScalar as the hull's planes are.
         const double inradius = static_cast<btScalar>(figure::inRadius(faces));

@@ -59,7 +59,9 @@ EngineContactFriction::~EngineContactFriction() {
     }
 }
 
-bool EngineContactFriction::installed() { return gFrictionInstalled && gContactAddedCallback == &engineContactFriction; }
+bool EngineContactFriction::installed() {
+    return gFrictionInstalled && gContactAddedCallback == &engineContactFriction;
+}
 
 void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     btContactSolverInfo& info = world.getSolverInfo();
@@ -184,9 +186,8 @@ void RagdollWorld::rebuildOwners() {
     for (std::size_t k = 0; k < m_ragdolls.size(); ++k)
         for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i)
             m_owners.emplace_back(&m_ragdolls[k]->body(i), static_cast<int>(k));
-    std::sort(m_owners.begin(), m_owners.end(), [](const auto& x, const auto& y) {
-        return std::less<const btCollisionObject*>()(x.first, y.first);
-    });
+    std::sort(m_owners.begin(), m_owners.end(),
+              [](const auto& x, const auto& y) { return std::less<const btCollisionObject*>()(x.first, y.first); });
 }
 
 } // namespace afb::bullet

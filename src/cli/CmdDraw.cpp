@@ -1,14 +1,14 @@
 // afb draw: a headless picture of a figure, in its load pose or in the pose of a drop at a given time.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
 #include "Commands.h"
 #include "MethodOptions.h"
 #include "Picture.h"
 #include "afb/figure/Load.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/Drop.h"
-
-#include <cmath>
-#include <cstdio>
-#include <iostream>
 
 namespace afb::cli {
 namespace {
@@ -35,22 +35,20 @@ PictureLayers parseLayers(const std::vector<std::string>& names) {
 std::string describeDrop(const sim::DropOptions& drop) {
     char buf[160];
     const int steps = drop.steps.value_or(0);
-    std::snprintf(buf, sizeof buf, "drop from %g m, t = %.3f s (%d steps at %g Hz)", drop.heightM,
-                  steps / drop.hz, steps, drop.hz);
+    std::snprintf(buf, sizeof buf, "drop from %g m, t = %.3f s (%d steps at %g Hz)", drop.heightM, steps / drop.hz,
+                  steps, drop.hz);
     return buf;
 }
 
 } // namespace
 
 void addDrawCommand(CLI::App& app, int& exitCode) {
-    auto* cmd =
-        app.add_subcommand("draw", "A picture of a figure (PNG or SVG): bodies, md5 skeleton, constraint "
-                                   "anchors, limits and masses, in its load pose or during a drop");
-    cmd->footer(
-        "Views are orthographic, at one scale, side by side: front (from +X, the way Doom models face), side "
-        "(from -Y) and top (from +Z). With --at, the figure is drawn in the pose of `afb drop` at that time "
-        "(the first instance, relative to its spawn: --at 0 is the load pose) and the ground is shown when "
-        "it is in view.");
+    auto* cmd = app.add_subcommand("draw", "A picture of a figure (PNG or SVG): bodies, md5 skeleton, constraint "
+                                           "anchors, limits and masses, in its load pose or during a drop");
+    cmd->footer("Views are orthographic, at one scale, side by side: front (from +X, the way Doom models face), side "
+                "(from -Y) and top (from +Z). With --at, the figure is drawn in the pose of `afb drop` at that time "
+                "(the first instance, relative to its spawn: --at 0 is the load pose) and the ground is shown when "
+                "it is in view.");
     struct Options {
         std::filesystem::path base = ".";
         std::string entity;
@@ -74,16 +72,14 @@ void addDrawCommand(CLI::App& app, int& exitCode) {
         ->delimiter(',')
         ->check(CLI::IsMember({"bodies", "joints", "limits", "mass", "skeleton"}))
         ->capture_default_str();
-    cmd->add_option("--at", opt->atSeconds,
-                    "Draw the pose of a drop at this time, s (default: the load pose)")
+    cmd->add_option("--at", opt->atSeconds, "Draw the pose of a drop at this time, s (default: the load pose)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--height", opt->drop.heightM, "Drop: height of the lowest point at spawn, m")
         ->capture_default_str();
     cmd->add_option("--hz", opt->drop.hz, "Drop: fixed step rate")->capture_default_str();
     addMethodOptions(cmd, opt->method);
     cmd->add_flag("--no-sleep", opt->noSleep, "Drop: never put the figure to rest");
-    cmd->add_flag("--doom-gravity", opt->doomGravity,
-                  "Drop: Doom's gravity, 1066 units/s², instead of 9.81 m/s²");
+    cmd->add_flag("--doom-gravity", opt->doomGravity, "Drop: Doom's gravity, 1066 units/s², instead of 9.81 m/s²");
     cmd->callback([opt, &exitCode] {
         figure::UnitSystem units;
         if (opt->doomGravity) units.gravityMps2 = units.doomGravityMps2();
@@ -134,8 +130,7 @@ void addDrawCommand(CLI::App& app, int& exitCode) {
             exitCode = 1;
             return;
         }
-        std::printf("afb draw: %s (%s) -> %s\n", opt->entity.c_str(), request.subtitle.c_str(),
-                    opt->out.c_str());
+        std::printf("afb draw: %s (%s) -> %s\n", opt->entity.c_str(), request.subtitle.c_str(), opt->out.c_str());
     });
 }
 

@@ -1,9 +1,9 @@
 // afb drop: drop figures onto a ground plane and report speed, accuracy and stability.
-#include <unistd.h>
-
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+
+#include <unistd.h>
 
 #include "Commands.h"
 #include "MethodOptions.h"
@@ -31,11 +31,13 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("entities", opt->entities, "entityDefs to drop")->required();
     cmd->add_option("--base", opt->base, "Content folder (af/, def/, models/)")->capture_default_str();
-    cmd->add_option("--height", opt->drop.heightM, "Height of each figure's lowest point at spawn, m")->capture_default_str();
+    cmd->add_option("--height", opt->drop.heightM, "Height of each figure's lowest point at spawn, m")
+        ->capture_default_str();
     cmd->add_option("--count", opt->drop.count, "Instances per figure, on a grid in one world")->capture_default_str();
     cmd->add_option("--threads", opt->drop.worlds, "Split the instances over this many worlds, one thread each")
         ->capture_default_str();
-    cmd->add_option("--seed", opt->seed, "Random initial orientations (yaw and tilt) from this seed; default: yaw 37°·i");
+    cmd->add_option("--seed", opt->seed,
+                    "Random initial orientations (yaw and tilt) from this seed; default: yaw 37°·i");
     cmd->add_option("--seconds", opt->drop.seconds, "Simulated time, s")->capture_default_str();
     cmd->add_option("--steps", opt->steps, "Exact number of steps (overrides --seconds); 0 reports the spawn pose");
     cmd->add_option("--hz", opt->drop.hz, "Fixed frame rate")->capture_default_str();
@@ -51,7 +53,8 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
             // The two Bullet builds cannot share a process: run the sibling binary built against the other one.
             const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
-            const std::filesystem::path other = self.parent_path() / (opt->precision == "double" ? "afb-double" : "afb");
+            const std::filesystem::path other =
+                self.parent_path() / (opt->precision == "double" ? "afb-double" : "afb");
             ::execv(other.c_str(), argv);
             std::cerr << "afb drop: cannot run " << other.string() << " for --precision " << opt->precision << "\n";
             exitCode = 1;
@@ -75,8 +78,8 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         auto lib = decl::Library::open(opt->base, diags);
         std::vector<sim::DropResult> results;
         std::printf("afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
-                    sim::bulletVersion().c_str(), sim::bulletPrecision(), opt->drop.hz, opt->drop.sleeping ? "on" : "off",
-                    units.gravityMps2, bullet::describe(opt->drop.method).c_str());
+                    sim::bulletVersion().c_str(), sim::bulletPrecision(), opt->drop.hz,
+                    opt->drop.sleeping ? "on" : "off", units.gravityMps2, bullet::describe(opt->drop.method).c_str());
         for (const std::string& e : opt->entities) {
             std::optional<figure::LoadedFigure> loaded;
             if (lib) loaded = figure::loadEntityFigure(*lib, e, units, diags);
@@ -98,7 +101,8 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             std::printf("%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", r.figure.c_str(),
                         r.bodies, r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps, r.maxAnchorErrorM,
                         r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
-                        r.exploded ? "YES" : "no", r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
+                        r.exploded ? "YES" : "no",
+                        r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
             if (r.exploded) exitCode = 1;
         }
         for (const sim::DropResult& r : results)

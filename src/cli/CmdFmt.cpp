@@ -31,8 +31,7 @@ void addFmtCommand(CLI::App& app, int& exitCode) {
         if (!opt->check) {
             std::cout << canonical;
         } else if (canonical != *data) {
-            std::cerr << opt->file.string() << ": not in canonical form (run: afb fmt " << opt->file.string()
-                      << ")\n";
+            std::cerr << opt->file.string() << ": not in canonical form (run: afb fmt " << opt->file.string() << ")\n";
             exitCode = 1;
         }
     });

@@ -104,7 +104,8 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
     record->add_option("--hz", rec->drop.hz, "Frame rate")->capture_default_str();
     addMethodOptions(record, rec->method);
     record->add_option("--seed", rec->seed, "Random initial orientation from this seed");
-    record->add_option("--position-tolerance", rec->positionM, "Per-joint position tolerance, m")->capture_default_str();
+    record->add_option("--position-tolerance", rec->positionM, "Per-joint position tolerance, m")
+        ->capture_default_str();
     record->add_option("--angle-tolerance", rec->angleDeg, "Per-joint angle tolerance, degrees")->capture_default_str();
     record->callback([rec, &exitCode] {
         std::string error;
@@ -132,10 +133,13 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
             {"bullet", sim::bulletVersion()},
             {"precision", sim::bulletPrecision()},
             {"tolerance", {{"position_m", rec->positionM}, {"angle_deg", rec->angleDeg}}},
-            {"settle_time_s", run.result->settleTimeS ? nlohmann::json(*run.result->settleTimeS) : nlohmann::json(nullptr)},
+            {"settle_time_s",
+             run.result->settleTimeS ? nlohmann::json(*run.result->settleTimeS) : nlohmann::json(nullptr)},
             {"state_hash", stateHash(*run.result)},
-            {"entity_transform", {{"position", {run.result->entity[0], run.result->entity[1], run.result->entity[2]}},
-                        {"quaternion", {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}}}},
+            {"entity_transform",
+             {{"position", {run.result->entity[0], run.result->entity[1], run.result->entity[2]}},
+              {"quaternion",
+               {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}}}},
             {"pose", sim::poseJson(run.result->finalPose)}};
         std::ofstream(rec->out) << g.dump(2) << "\n";
         std::printf("recorded %s -> %s (%zu joints, state %s)\n", rec->entity.c_str(), rec->out.string().c_str(),
@@ -156,80 +160,87 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
                       "Compare poses even when input files changed since recording (they are still listed)");
     compare->callback([cmp, &exitCode] {
         for (const std::filesystem::path& file : cmp->files) try {
-            text::Diagnostics diags;
-            const auto data = text::readFile(file, diags);
-            nlohmann::json g;
-            if (data) g = nlohmann::json::parse(*data, nullptr, false);
-            if (!data || g.is_discarded() || !g.contains("pose")) {
+                text::Diagnostics diags;
+                const auto data = text::readFile(file, diags);
+                nlohmann::json g;
+                if (data) g = nlohmann::json::parse(*data, nullptr, false);
+                if (!data || g.is_discarded() || !g.contains("pose")) {
+                    printDiagnostics(diags);
+                    std::cerr << file.string() << ": error: not a golden file\n";
+                    exitCode = 1;
+                    continue;
+                }
+                const std::filesystem::path base =
+                    std::filesystem::absolute(file).parent_path() / g["base"].get<std::string>();
+                const std::string entity = g["entity"];
+                // An input that changed is reported as such, not as a pose difference.
+                bool changed = false;
+                for (const auto& [rel, hash] : g["inputs"].items())
+                    if (fileHash(base / rel) != hash.get<std::string>()) {
+                        std::cerr << file.string() << ": input changed since recording: " << rel << "\n";
+                        changed = true;
+                    }
+                if (changed && !cmp->ignoreInputs) {
+                    exitCode = 1;
+                    continue;
+                }
+                sim::DropOptions options;
+                if (const std::string err = sim::dropOptionsFromJson(g["options"], options); !err.empty()) {
+                    std::cerr << file.string() << ": error: " << err << "\n";
+                    exitCode = 1;
+                    continue;
+                }
+                const Run run = runScenario(base, entity, options, diags);
                 printDiagnostics(diags);
-                std::cerr << file.string() << ": error: not a golden file\n";
-                exitCode = 1;
-                continue;
-            }
-            const std::filesystem::path base = std::filesystem::absolute(file).parent_path() / g["base"].get<std::string>();
-            const std::string entity = g["entity"];
-            // An input that changed is reported as such, not as a pose difference.
-            bool changed = false;
-            for (const auto& [rel, hash] : g["inputs"].items())
-                if (fileHash(base / rel) != hash.get<std::string>()) {
-                    std::cerr << file.string() << ": input changed since recording: " << rel << "\n";
-                    changed = true;
+                if (!run.result) {
+                    exitCode = 1;
+                    continue;
                 }
-            if (changed && !cmp->ignoreInputs) {
-                exitCode = 1;
-                continue;
-            }
-            sim::DropOptions options;
-            if (const std::string err = sim::dropOptionsFromJson(g["options"], options); !err.empty()) {
-                std::cerr << file.string() << ": error: " << err << "\n";
-                exitCode = 1;
-                continue;
-            }
-            const Run run = runScenario(base, entity, options, diags);
-            printDiagnostics(diags);
-            if (!run.result) {
-                exitCode = 1;
-                continue;
-            }
-            const double tolM = g["tolerance"]["position_m"], tolDeg = g["tolerance"]["angle_deg"];
-            std::vector<std::string> moved;
-            double worstM = 0, worstDeg = 0;
-            const auto& joints = g.at("pose");
-            // The entity transform (world) first, then every joint (model space).
-            std::vector<sim::JointPose> nowPose;
-            nowPose.push_back({"(entity)", {run.result->entity[0], run.result->entity[1], run.result->entity[2]},
-                               {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}});
-            nowPose.insert(nowPose.end(), run.result->finalPose.begin(), run.result->finalPose.end());
-            nlohmann::json expected = nlohmann::json::array();
-            if (g.contains("entity_transform")) expected.push_back(g["entity_transform"]);
-            else expected.push_back({{"position", {0, 0, 0}}, {"quaternion", {1, 0, 0, 0}}});
-            for (const auto& j : joints) expected.push_back(j);
-            for (std::size_t i = 0; i < expected.size() && i < nowPose.size(); ++i) {
-                const sim::JointPose& now = nowPose[i];
-                const std::vector<double> p = expected[i]["position"], q = expected[i]["quaternion"];
-                const double dm = std::hypot(now.position[0] - p[0], now.position[1] - p[1], now.position[2] - p[2]);
-                const double dd = angleDeg(now.quaternion, q.data());
-                worstM = std::max(worstM, dm);
-                worstDeg = std::max(worstDeg, dd);
-                if (dm > tolM || dd > tolDeg) {
-                    char line[160];
-                    std::snprintf(line, sizeof line, "  %-20s moved %.4f m, turned %.2f deg", now.name.c_str(), dm, dd);
-                    moved.emplace_back(line);
+                const double tolM = g["tolerance"]["position_m"], tolDeg = g["tolerance"]["angle_deg"];
+                std::vector<std::string> moved;
+                double worstM = 0, worstDeg = 0;
+                const auto& joints = g.at("pose");
+                // The entity transform (world) first, then every joint (model space).
+                std::vector<sim::JointPose> nowPose;
+                nowPose.push_back(
+                    {"(entity)",
+                     {run.result->entity[0], run.result->entity[1], run.result->entity[2]},
+                     {run.result->entity[3], run.result->entity[4], run.result->entity[5], run.result->entity[6]}});
+                nowPose.insert(nowPose.end(), run.result->finalPose.begin(), run.result->finalPose.end());
+                nlohmann::json expected = nlohmann::json::array();
+                if (g.contains("entity_transform")) expected.push_back(g["entity_transform"]);
+                else expected.push_back({{"position", {0, 0, 0}}, {"quaternion", {1, 0, 0, 0}}});
+                for (const auto& j : joints) expected.push_back(j);
+                for (std::size_t i = 0; i < expected.size() && i < nowPose.size(); ++i) {
+                    const sim::JointPose& now = nowPose[i];
+                    const std::vector<double> p = expected[i]["position"], q = expected[i]["quaternion"];
+                    const double dm =
+                        std::hypot(now.position[0] - p[0], now.position[1] - p[1], now.position[2] - p[2]);
+                    const double dd = angleDeg(now.quaternion, q.data());
+                    worstM = std::max(worstM, dm);
+                    worstDeg = std::max(worstDeg, dd);
+                    if (dm > tolM || dd > tolDeg) {
+                        char line[160];
+                        std::snprintf(line, sizeof line, "  %-20s moved %.4f m, turned %.2f deg", now.name.c_str(), dm,
+                                      dd);
+                        moved.emplace_back(line);
+                    }
                 }
+                bool fail = !moved.empty() || joints.size() + 1 != nowPose.size();
+                const std::string hash = stateHash(*run.result);
+                if (cmp->exact && hash != g["state_hash"].get<std::string>()) fail = true;
+                std::printf("%s %s: worst joint %.4f m / %.2f deg (tolerance %.4f m / %.2f deg)%s%s\n",
+                            fail ? "FAIL" : "ok  ", file.string().c_str(), worstM, worstDeg, tolM, tolDeg,
+                            cmp->exact ? (hash == g["state_hash"].get<std::string>() ? ", state hash equal"
+                                                                                     : ", state hash differs")
+                                       : "",
+                            joints.size() + 1 != nowPose.size() ? ", joint count differs" : "");
+                for (const std::string& m : moved) std::printf("%s\n", m.c_str());
+                if (fail) exitCode = 1;
+            } catch (const nlohmann::json::exception& e) {
+                std::cerr << file.string() << ": error: malformed golden file: " << e.what() << "\n";
+                exitCode = 1;
             }
-            bool fail = !moved.empty() || joints.size() + 1 != nowPose.size();
-            const std::string hash = stateHash(*run.result);
-            if (cmp->exact && hash != g["state_hash"].get<std::string>()) fail = true;
-            std::printf("%s %s: worst joint %.4f m / %.2f deg (tolerance %.4f m / %.2f deg)%s%s\n",
-                        fail ? "FAIL" : "ok  ", file.string().c_str(), worstM, worstDeg, tolM, tolDeg,
-                        cmp->exact ? (hash == g["state_hash"].get<std::string>() ? ", state hash equal" : ", state hash differs") : "",
-                        joints.size() + 1 != nowPose.size() ? ", joint count differs" : "");
-            for (const std::string& m : moved) std::printf("%s\n", m.c_str());
-            if (fail) exitCode = 1;
-        } catch (const nlohmann::json::exception& e) {
-            std::cerr << file.string() << ": error: malformed golden file: " << e.what() << "\n";
-            exitCode = 1;
-        }
     });
 }
 

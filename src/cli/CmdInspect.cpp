@@ -19,7 +19,9 @@ nlohmann::json limitJson(const figure::FigureConstraint& c) {
     if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
         return {{"kind", "cone"}, {"halfAngleDeg", deg(cone->halfAngleRad)}};
     if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-        return {{"kind", "pyramid"}, {"halfAngle1Deg", deg(p->halfAngle1Rad)}, {"halfAngle2Deg", deg(p->halfAngle2Rad)}};
+        return {{"kind", "pyramid"},
+                {"halfAngle1Deg", deg(p->halfAngle1Rad)},
+                {"halfAngle2Deg", deg(p->halfAngle2Rad)}};
     if (const auto* h = std::get_if<figure::HingeRange>(&c.limit))
         return {{"kind", "hinge"}, {"lowerDeg", deg(h->lowerRad)}, {"upperDeg", deg(h->upperRad)}};
     return nullptr;
@@ -33,8 +35,7 @@ std::string limitText(const figure::FigureConstraint& c) {
         std::snprintf(buf, sizeof buf, "pyramid %.1f x %.1f deg", deg(p->halfAngle1Rad), deg(p->halfAngle2Rad));
     else if (const auto* h = std::get_if<figure::HingeRange>(&c.limit))
         std::snprintf(buf, sizeof buf, "hinge [%.1f, %.1f] deg", deg(h->lowerRad), deg(h->upperRad));
-    else
-        return "-";
+    else return "-";
     return buf;
 }
 
@@ -56,7 +57,8 @@ nlohmann::json figureJson(const figure::Figure& f) {
                           {"selfCollision", b.selfCollision},
                           {"containedJoints", b.containedJoints.size()}});
     for (const figure::FigureConstraint& c : f.constraints) {
-        const Eigen::Vector3d anchor = f.bodies[static_cast<std::size_t>(c.body1)].loadPose.apply(c.frameInBody1.position);
+        const Eigen::Vector3d anchor =
+            f.bodies[static_cast<std::size_t>(c.body1)].loadPose.apply(c.frameInBody1.position);
         constraints.push_back({{"name", c.name},
                                {"type", figure::toString(c.type)},
                                {"body1", f.bodies[static_cast<std::size_t>(c.body1)].name},
@@ -83,9 +85,9 @@ void printFigure(const figure::Figure& f) {
     for (const figure::FigureBody& b : f.bodies) {
         const Eigen::Vector3d& c = b.loadPose.position;
         std::printf("%-14s %-14s %-11s %-12s %5zu %11.3e %9.3f  (%7.3f %7.3f %7.3f)  %.3e %.3e %.3e\n", b.name.c_str(),
-                    b.joint >= 0 ? f.skeleton.name(b.joint).c_str() : "-", modName(b.mod), figure::toString(b.shape.kind),
-                    b.shape.vertices.size(), b.volumeM3, b.massKg, c.x(), c.y(), c.z(), b.inertiaKgM2.x(),
-                    b.inertiaKgM2.y(), b.inertiaKgM2.z());
+                    b.joint >= 0 ? f.skeleton.name(b.joint).c_str() : "-", modName(b.mod),
+                    figure::toString(b.shape.kind), b.shape.vertices.size(), b.volumeM3, b.massKg, c.x(), c.y(), c.z(),
+                    b.inertiaKgM2.x(), b.inertiaKgM2.y(), b.inertiaKgM2.z());
     }
     std::printf("\n%-22s %-19s %-14s %-14s %-26s %s\n", "constraint", "type", "body1", "body2", "anchor (model, m)",
                 "limit");
@@ -140,7 +142,8 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
             loaded = figure::loadFigureFiles(opt->af, opt->name, opt->mesh, opt->pose,
                                              {opt->offset[0], opt->offset[1], opt->offset[2]}, units, diags);
         } else if (!opt->entity.empty()) {
-            if (auto lib = decl::Library::open(opt->base, diags)) loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags);
+            if (auto lib = decl::Library::open(opt->base, diags))
+                loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags);
         } else {
             std::cerr << "afb inspect: give an ENTITY (with --base) or --af, --mesh and --pose\n";
             exitCode = 1;

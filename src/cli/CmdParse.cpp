@@ -59,7 +59,8 @@ nlohmann::json parseOne(const std::filesystem::path& path, text::Diagnostics& di
         }
     } else {
         out["kind"] = nullptr;
-        diags.error({path.string(), 0, 0}, "unknown file type '" + ext + "' (expected .af, .def, .md5mesh or .md5anim)");
+        diags.error({path.string(), 0, 0},
+                    "unknown file type '" + ext + "' (expected .af, .def, .md5mesh or .md5anim)");
     }
     out["ok"] = !diags.hasErrors();
     return out;

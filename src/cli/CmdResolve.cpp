@@ -31,11 +31,16 @@ void addResolveCommand(CLI::App& app, int& exitCode) {
             return;
         }
         if (opt->json) {
-            const nlohmann::json j = {{"entity", r->entityName},       {"entityChain", r->entityChain},
-                                      {"model", r->modelName},         {"modelChain", r->modelChain},
-                                      {"mesh", r->meshPath.string()},  {"afPoseAnim", r->afPoseAnim},
-                                      {"afPose", r->afPosePath.string()}, {"figureKey", r->figureKey},
-                                      {"figure", r->figureName},       {"figureFile", r->figureFile.string()}};
+            const nlohmann::json j = {{"entity", r->entityName},
+                                      {"entityChain", r->entityChain},
+                                      {"model", r->modelName},
+                                      {"modelChain", r->modelChain},
+                                      {"mesh", r->meshPath.string()},
+                                      {"afPoseAnim", r->afPoseAnim},
+                                      {"afPose", r->afPosePath.string()},
+                                      {"figureKey", r->figureKey},
+                                      {"figure", r->figureName},
+                                      {"figureFile", r->figureFile.string()}};
             std::cout << j.dump(2) << "\n";
             return;
         }

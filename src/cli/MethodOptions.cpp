@@ -12,8 +12,8 @@ void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& optio
     const bullet::Method base;
     for (std::size_t i = 0; i < knobs.size(); ++i)
         cmd->add_option("--" + std::string(knobs[i].name), options->overrides[i],
-                        std::string(knobs[i].help) + " (overrides the method's; default method: " +
-                            bullet::knobValue(base, knobs[i]) + ")")
+                        std::string(knobs[i].help) +
+                            " (overrides the method's; default method: " + bullet::knobValue(base, knobs[i]) + ")")
             ->group("Method knobs");
 }
 

@@ -2,15 +2,16 @@
 // cairo surfaces that write PNG and SVG.
 #include "Picture.h"
 
-#include "PictureView.h"
-
 #include <algorithm>
 #include <array>
-#include <cairo-svg.h>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <memory>
+
+#include <cairo-svg.h>
+
+#include "PictureView.h"
 
 namespace afb::cli {
 namespace {
@@ -32,30 +33,21 @@ using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_dest
 
 const char* viewLabel(View view) {
     switch (view) {
-    case View::Front:
-        return "front (from +X)";
-    case View::Side:
-        return "side (from \u2212Y)";
-    case View::Top:
-        return "top (from +Z)";
+    case View::Front: return "front (from +X)";
+    case View::Side: return "side (from \u2212Y)";
+    case View::Top: return "top (from +Z)";
     }
     return "";
 }
 
 const char* typeLabel(figure::JointType type) {
     switch (type) {
-    case figure::JointType::Fixed:
-        return "fixed";
-    case figure::JointType::BallAndSocket:
-        return "ball and socket";
-    case figure::JointType::Universal:
-        return "universal";
-    case figure::JointType::Hinge:
-        return "hinge";
-    case figure::JointType::Slider:
-        return "slider";
-    case figure::JointType::Spring:
-        return "spring";
+    case figure::JointType::Fixed: return "fixed";
+    case figure::JointType::BallAndSocket: return "ball and socket";
+    case figure::JointType::Universal: return "universal";
+    case figure::JointType::Hinge: return "hinge";
+    case figure::JointType::Slider: return "slider";
+    case figure::JointType::Spring: return "spring";
     }
     return "";
 }
@@ -149,17 +141,16 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                          },
                          "md5 skeleton (" + std::to_string(figure.skeleton.jointCount()) + " joints)"});
     if (show.skeleton)
-        items.push_back({[](cairo_t* cr, Vector2d at) { drawRootMark(cr, at + Vector2d(13, 0)); },
-                         "root joint (entity origin)"});
+        items.push_back(
+            {[](cairo_t* cr, Vector2d at) { drawRootMark(cr, at + Vector2d(13, 0)); }, "root joint (entity origin)"});
     if (show.joints) {
         for (int t = 0; t <= static_cast<int>(figure::JointType::Spring); ++t) {
             const auto type = static_cast<figure::JointType>(t);
             const auto n = std::count_if(figure.constraints.begin(), figure.constraints.end(),
                                          [&](const figure::FigureConstraint& c) { return c.type == type; });
             if (n == 0) continue;
-            items.push_back(
-                {[type](cairo_t* cr, Vector2d at) { drawAnchorMark(cr, type, at + Vector2d(13, 0)); },
-                 std::string(typeLabel(type)) + " (" + std::to_string(n) + ")"});
+            items.push_back({[type](cairo_t* cr, Vector2d at) { drawAnchorMark(cr, type, at + Vector2d(13, 0)); },
+                             std::string(typeLabel(type)) + " (" + std::to_string(n) + ")"});
         }
     }
     const bool anyLimit = std::any_of(figure.constraints.begin(), figure.constraints.end(),
@@ -228,8 +219,7 @@ Layout layOutPanels(const figure::Figure& figure, const PictureRequest& request,
         tallest = std::max(tallest, hi.y() - lo.y());
         widths += hi.x() - lo.x();
     }
-    layout.pxPerM =
-        std::min(kMaxFigureHeight / std::max(tallest, 0.05), kMaxFiguresWidth / std::max(widths, 0.05));
+    layout.pxPerM = std::min(kMaxFigureHeight / std::max(tallest, 0.05), kMaxFiguresWidth / std::max(widths, 0.05));
 
     const double panelHeight = tallest * layout.pxPerM + 2 * kPanelPad;
     double x = kMargin;
@@ -244,8 +234,7 @@ Layout layOutPanels(const figure::Figure& figure, const PictureRequest& request,
         p.width = std::max(kMinPanelWidth, (hi.x() - lo.x()) * layout.pxPerM + 2 * kPanelPad);
         p.height = panelHeight;
         const Vector2d centre = 0.5 * (lo + hi);
-        p.originPx = {p.x + 0.5 * p.width - centre.x() * p.pxPerM,
-                      p.y + 0.5 * p.height + centre.y() * p.pxPerM};
+        p.originPx = {p.x + 0.5 * p.width - centre.x() * p.pxPerM, p.y + 0.5 * p.height + centre.y() * p.pxPerM};
         layout.panels.push_back(p);
         x += p.width + kPanelGap;
     }
@@ -283,8 +272,7 @@ void layOutLegend(cairo_t* measure, Layout& layout, const std::vector<LegendItem
 }
 
 void drawScaleBar(cairo_t* cr, const Layout& layout) {
-    const double length = layout.scaleBarM * layout.pxPerM, x = layout.scaleBarAt.x(),
-                 y = layout.scaleBarAt.y();
+    const double length = layout.scaleBarM * layout.pxPerM, x = layout.scaleBarAt.x(), y = layout.scaleBarAt.y();
     constexpr int kSegments = 4;
     for (int k = 0; k < kSegments; ++k) {
         cairo_rectangle(cr, x + length * k / kSegments, y - 3, length / kSegments, 6);
@@ -313,8 +301,7 @@ void drawPage(cairo_t* cr, const figure::Figure& figure, const PictureRequest& r
     cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
     std::string facts = request.subtitle.empty() ? "" : request.subtitle + "  \u00b7  ";
     facts += "figure " + figure.name + ", " + std::to_string(figure.bodies.size()) + " bodies, " +
-             std::to_string(figure.constraints.size()) + " constraints, " +
-             format("%.1f kg", figure.totalMassKg);
+             std::to_string(figure.constraints.size()) + " constraints, " + format("%.1f kg", figure.totalMassKg);
     text(cr, kMargin, kMargin + 42, facts);
 
     for (std::size_t i = 0; i < layout.panels.size(); ++i) {
@@ -349,12 +336,9 @@ void drawPage(cairo_t* cr, const figure::Figure& figure, const PictureRequest& r
 
 const char* viewName(View view) {
     switch (view) {
-    case View::Front:
-        return "front";
-    case View::Side:
-        return "side";
-    case View::Top:
-        return "top";
+    case View::Front: return "front";
+    case View::Side: return "side";
+    case View::Top: return "top";
     }
     return "";
 }
@@ -362,11 +346,9 @@ const char* viewName(View view) {
 std::optional<std::string> drawPicture(const figure::Figure& figure, const PictureRequest& request,
                                        const std::filesystem::path& out) {
     const std::string extension = out.extension().string();
-    if (extension != ".png" && extension != ".svg")
-        return out.string() + ": the picture must be a .png or .svg file";
+    if (extension != ".png" && extension != ".svg") return out.string() + ": the picture must be a .png or .svg file";
     if (request.views.empty()) return std::string("no view to draw");
-    if (request.bodies.size() != figure.bodies.size())
-        return std::string("one body transform per body expected");
+    if (request.bodies.size() != figure.bodies.size()) return std::string("one body transform per body expected");
 
     PanelStyle style;
     style.glyphM = std::clamp(0.065 * loadPoseDiagonal(figure), 0.02, 0.3);
@@ -381,8 +363,7 @@ std::optional<std::string> drawPicture(const figure::Figure& figure, const Pictu
     SurfacePtr scratch(cairo_image_surface_create(CAIRO_FORMAT_RGB24, 1, 1), cairo_surface_destroy);
     CairoPtr measure(cairo_create(scratch.get()), cairo_destroy);
     layOutLegend(measure.get(), layout, legend);
-    const int width = static_cast<int>(std::ceil(layout.width)),
-              height = static_cast<int>(std::ceil(layout.height));
+    const int width = static_cast<int>(std::ceil(layout.width)), height = static_cast<int>(std::ceil(layout.height));
 
     const bool png = extension == ".png";
     SurfacePtr surface(png ? cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height)

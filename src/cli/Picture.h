@@ -2,12 +2,12 @@
 // Headless pictures of a figure for `afb draw`: orthographic views of the bodies, the md5 skeleton, the
 // constraint anchors, the limits and the masses, drawn with cairo to PNG or SVG, with a legend and a scale
 // bar in metres.
-#include "afb/figure/Figure.h"
-
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "afb/figure/Figure.h"
 
 namespace afb::cli {
 

@@ -14,19 +14,11 @@ using Eigen::Vector3d;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMarkPx = 4.5; // half size of an anchor mark
 
-void setColour(cairo_t* cr, const Rgb& c, double alpha = 1.0) {
-    cairo_set_source_rgba(cr, c.r, c.g, c.b, alpha);
-}
-Rgb scaled(const Rgb& c, double k) {
-    return {c.r * k, c.g * k, c.b * k};
-}
+void setColour(cairo_t* cr, const Rgb& c, double alpha = 1.0) { cairo_set_source_rgba(cr, c.r, c.g, c.b, alpha); }
+Rgb scaled(const Rgb& c, double k) { return {c.r * k, c.g * k, c.b * k}; }
 
-void moveTo(cairo_t* cr, const Vector2d& p) {
-    cairo_move_to(cr, p.x(), p.y());
-}
-void lineTo(cairo_t* cr, const Vector2d& p) {
-    cairo_line_to(cr, p.x(), p.y());
-}
+void moveTo(cairo_t* cr, const Vector2d& p) { cairo_move_to(cr, p.x(), p.y()); }
+void lineTo(cairo_t* cr, const Vector2d& p) { cairo_line_to(cr, p.x(), p.y()); }
 void line(cairo_t* cr, const Vector2d& a, const Vector2d& b) {
     moveTo(cr, a);
     lineTo(cr, b);
@@ -58,8 +50,7 @@ struct Face {
 // Painter's order: the faces turned toward the viewer, farthest first. The polytopes are convex, so culling
 // the back faces leaves only the order between bodies to get right, which centroid depth does for touching
 // limbs.
-void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-                const PanelMapping& panel) {
+void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel) {
     std::vector<Face> faces;
     for (std::size_t i = 0; i < figure.bodies.size(); ++i) {
         const figure::BodyShape& shape = figure.bodies[i].shape;
@@ -82,8 +73,7 @@ void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
             faces.push_back(std::move(f));
         }
     }
-    std::stable_sort(faces.begin(), faces.end(),
-                     [](const Face& a, const Face& b) { return a.depth < b.depth; });
+    std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.depth < b.depth; });
     cairo_set_line_width(cr, 1.0);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const Face& f : faces) {
@@ -96,8 +86,7 @@ void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
     }
 }
 
-void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-                  const PanelMapping& panel) {
+void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel) {
     const figure::Skeleton& skeleton = figure.skeleton;
     const std::size_t n = std::min(request.joints.size(), static_cast<std::size_t>(skeleton.jointCount()));
     setColour(cr, skeletonColour(), 0.9);
@@ -126,16 +115,15 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
 }
 
 // A cone of half angle `halfAngle` about `axis` from `apex`: its rim and four generators.
-void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Vector3d& axis,
-              double halfAngle, double length) {
+void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Vector3d& axis, double halfAngle,
+              double length) {
     const auto [u, v] = perpendicular(axis);
     std::vector<Vector2d> rim;
     constexpr int kSides = 48;
     for (int k = 0; k < kSides; ++k) {
         const double phi = 2 * kPi * k / kSides;
-        rim.push_back(
-            panel.toPx(apex + length * (std::cos(halfAngle) * axis +
-                                        std::sin(halfAngle) * (std::cos(phi) * u + std::sin(phi) * v))));
+        rim.push_back(panel.toPx(apex + length * (std::cos(halfAngle) * axis +
+                                                  std::sin(halfAngle) * (std::cos(phi) * u + std::sin(phi) * v))));
     }
     polyline(cr, rim, true);
     cairo_stroke(cr);
@@ -148,8 +136,7 @@ void drawPyramid(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, c
                  double halfAngle1, double halfAngle2, double length) {
     const double t1 = std::tan(std::min(halfAngle1, 1.5)), t2 = std::tan(std::min(halfAngle2, 1.5)); // < 86°
     std::vector<Vector2d> rim;
-    for (const auto& [s1, s2] :
-         std::array<std::pair<double, double>, 4>{{{1, 1}, {1, -1}, {-1, -1}, {-1, 1}}}) {
+    for (const auto& [s1, s2] : std::array<std::pair<double, double>, 4>{{{1, 1}, {1, -1}, {-1, -1}, {-1, 1}}}) {
         const Vector3d edge = (basis.col(0) + s1 * t1 * basis.col(1) + s2 * t2 * basis.col(2)).normalized();
         rim.push_back(panel.toPx(apex + length * edge));
     }
@@ -160,8 +147,8 @@ void drawPyramid(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, c
 }
 
 // A hinge: the sector φ ∈ [lower, upper] about frame2's Z from its X (§4.5), and the axis itself.
-void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transform& frame2,
-                  const figure::HingeRange& h, double radius) {
+void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transform& frame2, const figure::HingeRange& h,
+                  double radius) {
     const Vector3d o = frame2.position, x = frame2.rotation.col(0), y = frame2.rotation.col(1);
     const Vector3d z = frame2.rotation.col(2);
     const double span = std::min(h.upperRad - h.lowerRad, 2 * kPi);
@@ -180,8 +167,8 @@ void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transfor
     cairo_set_dash(cr, nullptr, 0, 0);
 }
 
-void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-                const PanelMapping& panel, double glyphM) {
+void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+                double glyphM) {
     cairo_set_line_width(cr, 1.1);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const figure::FigureConstraint& c : figure.constraints) {
@@ -194,8 +181,7 @@ void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
         Vector3d shaft = Vector3d::Zero();
         double shaftLength = glyphM * 1.15;
         if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-            drawCone(cr, panel, frame2.position, body2.rotation * cone->axisInBody2, cone->halfAngleRad,
-                     glyphM);
+            drawCone(cr, panel, frame2.position, body2.rotation * cone->axisInBody2, cone->halfAngleRad, glyphM);
             shaft = body1.rotation * cone->shaftInBody1;
         } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
             drawPyramid(cr, panel, frame2.position, body2.rotation * p->basisInBody2, p->halfAngle1Rad,
@@ -226,14 +212,13 @@ void zigzag(cairo_t* cr, const Vector2d& a, const Vector2d& b) {
     lineTo(cr, b);
 }
 
-void drawAnchors(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-                 const PanelMapping& panel) {
+void drawAnchors(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel) {
     // Nearest anchors last, like the bodies.
     std::vector<std::pair<double, std::size_t>> order;
     for (std::size_t i = 0; i < figure.constraints.size(); ++i) {
         const figure::FigureConstraint& c = figure.constraints[i];
-        order.emplace_back(
-            panel.depth((request.bodies[static_cast<std::size_t>(c.body1)] * c.frameInBody1).position), i);
+        order.emplace_back(panel.depth((request.bodies[static_cast<std::size_t>(c.body1)] * c.frameInBody1).position),
+                           i);
     }
     std::stable_sort(order.begin(), order.end());
     for (const auto& [depth, i] : order) {
@@ -252,8 +237,8 @@ void drawAnchors(cairo_t* cr, const figure::Figure& figure, const PictureRequest
     }
 }
 
-void drawMasses(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-                const PanelMapping& panel, const PanelStyle& style) {
+void drawMasses(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+                const PanelStyle& style) {
     for (std::size_t i = 0; i < figure.bodies.size(); ++i) {
         const Vector2d p = panel.toPx(request.bodies[i].position);
         const double radius = style.massPxPerSqrtKg * std::sqrt(std::max(0.0, figure.bodies[i].massKg));
@@ -349,18 +334,14 @@ bool groundInView(const PictureRequest& request, const PanelMapping& panel) {
 
 ViewAxes viewAxes(View view) {
     switch (view) {
-    case View::Front:
-        return {Vector3d::UnitY(), Vector3d::UnitZ(), Vector3d::UnitX()};
-    case View::Side:
-        return {Vector3d::UnitX(), Vector3d::UnitZ(), -Vector3d::UnitY()};
-    case View::Top:
-        return {-Vector3d::UnitY(), Vector3d::UnitX(), Vector3d::UnitZ()};
+    case View::Front: return {Vector3d::UnitY(), Vector3d::UnitZ(), Vector3d::UnitX()};
+    case View::Side: return {Vector3d::UnitX(), Vector3d::UnitZ(), -Vector3d::UnitY()};
+    case View::Top: return {-Vector3d::UnitY(), Vector3d::UnitX(), Vector3d::UnitZ()};
     }
     return {};
 }
 
-std::pair<Vector2d, Vector2d> viewBounds(const figure::Figure& figure, const PictureRequest& request,
-                                         View view) {
+std::pair<Vector2d, Vector2d> viewBounds(const figure::Figure& figure, const PictureRequest& request, View view) {
     const ViewAxes axes = viewAxes(view);
     Vector2d lo = Vector2d::Constant(1e30), hi = Vector2d::Constant(-1e30);
     auto add = [&](const Vector3d& p) {
@@ -379,8 +360,8 @@ std::pair<Vector2d, Vector2d> viewBounds(const figure::Figure& figure, const Pic
     return {lo, hi};
 }
 
-void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-               const PanelMapping& panel, const PanelStyle& style) {
+void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+               const PanelStyle& style) {
     cairo_save(cr);
     cairo_rectangle(cr, panel.x, panel.y, panel.width, panel.height);
     cairo_clip(cr);
@@ -396,18 +377,12 @@ void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& 
 
 Rgb constraintColour(figure::JointType type) {
     switch (type) {
-    case figure::JointType::Fixed:
-        return {0.35, 0.35, 0.35};
-    case figure::JointType::BallAndSocket:
-        return {0.84, 0.15, 0.16};
-    case figure::JointType::Universal:
-        return {0.55, 0.30, 0.75};
-    case figure::JointType::Hinge:
-        return {0.10, 0.42, 0.80};
-    case figure::JointType::Slider:
-        return {0.10, 0.60, 0.25};
-    case figure::JointType::Spring:
-        return {0.95, 0.50, 0.05};
+    case figure::JointType::Fixed: return {0.35, 0.35, 0.35};
+    case figure::JointType::BallAndSocket: return {0.84, 0.15, 0.16};
+    case figure::JointType::Universal: return {0.55, 0.30, 0.75};
+    case figure::JointType::Hinge: return {0.10, 0.42, 0.80};
+    case figure::JointType::Slider: return {0.10, 0.60, 0.25};
+    case figure::JointType::Spring: return {0.95, 0.50, 0.05};
     }
     return {};
 }
@@ -417,9 +392,7 @@ void drawAnchorMark(cairo_t* cr, figure::JointType type, const Vector2d& at) {
     cairo_new_path(cr);
     switch (type) {
     case figure::JointType::BallAndSocket:
-    case figure::JointType::Spring:
-        cairo_arc(cr, x, y, r, 0, 2 * kPi);
-        break;
+    case figure::JointType::Spring: cairo_arc(cr, x, y, r, 0, 2 * kPi); break;
     case figure::JointType::Universal:
         cairo_move_to(cr, x, y - r * 1.25);
         cairo_line_to(cr, x + r * 1.25, y);
@@ -427,9 +400,7 @@ void drawAnchorMark(cairo_t* cr, figure::JointType type, const Vector2d& at) {
         cairo_line_to(cr, x - r * 1.25, y);
         cairo_close_path(cr);
         break;
-    case figure::JointType::Hinge:
-        cairo_rectangle(cr, x - r, y - r, 2 * r, 2 * r);
-        break;
+    case figure::JointType::Hinge: cairo_rectangle(cr, x - r, y - r, 2 * r, 2 * r); break;
     case figure::JointType::Slider:
         cairo_move_to(cr, x, y - r * 1.2);
         cairo_line_to(cr, x + r * 1.1, y + r * 0.8);
@@ -484,8 +455,6 @@ void drawRootMark(cairo_t* cr, const Vector2d& at) {
     cairo_stroke(cr);
 }
 
-Rgb skeletonColour() {
-    return {0.12, 0.12, 0.18};
-}
+Rgb skeletonColour() { return {0.12, 0.12, 0.18}; }
 
 } // namespace afb::cli

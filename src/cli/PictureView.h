@@ -1,9 +1,9 @@
 #pragma once
 // One panel of a figure picture (Picture.h): the orthographic projection of a view and the figure's layers
 // drawn into it with cairo. The page layout, legend and scale bar are Picture.cpp's.
-#include "Picture.h"
-
 #include <cairo.h>
+
+#include "Picture.h"
 
 namespace afb::cli {
 
@@ -41,15 +41,15 @@ struct PanelStyle {
 
 /// The figure's bounds in `view`: min and max over body vertices, md5 joints (not the root) and anchors of
 /// the page coordinates (right, up), metres.
-std::pair<Eigen::Vector2d, Eigen::Vector2d> viewBounds(const figure::Figure& figure,
-                                                       const PictureRequest& request, View view);
+std::pair<Eigen::Vector2d, Eigen::Vector2d> viewBounds(const figure::Figure& figure, const PictureRequest& request,
+                                                       View view);
 
 /// Whether the request's ground plane is drawn in the panel: a view with Z up, the ground inside the panel.
 bool groundInView(const PictureRequest& request, const PanelMapping& panel);
 
 /// Draws the requested layers of the figure into the panel, clipped to it.
-void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request,
-               const PanelMapping& panel, const PanelStyle& style);
+void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+               const PanelStyle& style);
 
 /// The colour that marks constraints of `type` (anchors and limits).
 Rgb constraintColour(figure::JointType type);

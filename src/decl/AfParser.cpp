@@ -26,7 +26,8 @@ class AfParser {
         while (true) {
             const Token t = m_lex.next();
             if (t.isPunct('}')) break;
-            if (t.kind == TokenKind::End) m_lex.fail(t, "unexpected end of file in articulatedFigure '" + decl.name + "'");
+            if (t.kind == TokenKind::End)
+                m_lex.fail(t, "unexpected end of file in articulatedFigure '" + decl.name + "'");
             if (t.isNameI("settings")) {
                 decl.order.push_back({AfBlockRef::Kind::Settings, decl.settings.size()});
                 decl.settings.push_back(parseSettings(t));
@@ -218,8 +219,8 @@ class AfParser {
                 b.mod = std::string(m.text);
                 const auto is = [&](std::string_view v) { return text::equalsIgnoreCase(m.text, v); };
                 if (m.kind == TokenKind::Punct || !(is("orientation") || is("position") || is("both")))
-                    m_lex.warn(m, "unknown mod " + m.describe() +
-                                      " in body '" + b.name + "': the engine treats it as orientation");
+                    m_lex.warn(m, "unknown mod " + m.describe() + " in body '" + b.name +
+                                      "': the engine treats it as orientation");
             } else if (t.isNameI("model")) b.model = parseShape();
             else if (t.isNameI("origin")) b.origin = parseVector("origin");
             else if (t.isNameI("angles")) {

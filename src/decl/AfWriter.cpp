@@ -41,7 +41,8 @@ std::string vec(const AfVector& v) {
     case AfVector::Form::Literal:
         return out + "( " + num(v.literal.x) + ", " + num(v.literal.y) + ", " + num(v.literal.z) + " )";
     case AfVector::Form::Joint: return out + "joint( " + inQuotes(v.joint1) + " )";
-    case AfVector::Form::BoneCenter: return out + "bonecenter( " + inQuotes(v.joint1) + ", " + inQuotes(v.joint2) + " )";
+    case AfVector::Form::BoneCenter:
+        return out + "bonecenter( " + inQuotes(v.joint1) + ", " + inQuotes(v.joint2) + " )";
     case AfVector::Form::BoneDir: return out + "bonedir( " + inQuotes(v.joint1) + ", " + inQuotes(v.joint2) + " )";
     }
     return out;
@@ -147,7 +148,8 @@ class Writer {
         optVec("axis", c.axis);
         optNum("friction", c.friction);
         if (const auto* cone = std::get_if<ConeLimit>(&c.limit))
-            line("coneLimit", vec(cone->axis) + ", " + num(cone->angleDeg) + (cone->shaft ? ", " + vec(*cone->shaft) : ""));
+            line("coneLimit",
+                 vec(cone->axis) + ", " + num(cone->angleDeg) + (cone->shaft ? ", " + vec(*cone->shaft) : ""));
         if (const auto* pyr = std::get_if<PyramidLimit>(&c.limit))
             line("pyramidLimit", vec(pyr->axis) + ", " + num(pyr->angle1Deg) + ", " + num(pyr->angle2Deg) + ", " +
                                      num(pyr->rollDeg) + (pyr->shaft ? ", " + vec(*pyr->shaft) : ""));

@@ -5,9 +5,11 @@
 namespace afb::decl::detail {
 namespace {
 // Decl types registered by the engine (DeclManager.cpp) and by the Doom 3 game (model, export).
-constexpr std::array<std::string_view, 15> kDeclTypes = {
-    "table", "material", "skin", "sound", "entityDef", "mapDef", "fx", "particle", "articulatedFigure",
-    "pda", "email", "video", "audio", "model", "export"};
+constexpr std::array<std::string_view, 15> kDeclTypes = {"table", "material",  "skin",
+                                                         "sound", "entityDef", "mapDef",
+                                                         "fx",    "particle",  "articulatedFigure",
+                                                         "pda",   "email",     "video",
+                                                         "audio", "model",     "export"};
 } // namespace
 
 bool isDeclTypeName(std::string_view word) {

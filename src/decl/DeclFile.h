@@ -42,8 +42,8 @@ void forEachDecl(text::Lexer& lex, std::string_view defaultType, OnDecl&& onDecl
             lex.fail(first, "expected a decl type or name, found " + first.describe());
         }
         if (!lex.peek().isPunct('{'))
-            lex.fail(lex.peek(), "expected '{' after " + header.type + " '" + header.name + "', found " +
-                                     lex.peek().describe());
+            lex.fail(lex.peek(),
+                     "expected '{' after " + header.type + " '" + header.name + "', found " + lex.peek().describe());
         if (!onDecl(header)) lex.skipBracedSection();
     }
 }

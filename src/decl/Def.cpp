@@ -1,12 +1,12 @@
 #include "afb/decl/Def.h"
 
-#include "DeclFile.h"
-#include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
-
 #include <array>
 #include <map>
 #include <set>
+
+#include "DeclFile.h"
+#include "afb/text/Files.h"
+#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {
@@ -14,9 +14,7 @@ namespace {
 using text::Token;
 using text::TokenKind;
 
-char lowerAscii(char c) {
-    return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
-}
+char lowerAscii(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
 
 std::string lowerCopy(std::string_view s) {
     std::string out(s);
@@ -24,9 +22,7 @@ std::string lowerCopy(std::string_view s) {
     return out;
 }
 
-bool isDigit(char c) {
-    return c >= '0' && c <= '9';
-}
+bool isDigit(char c) { return c >= '0' && c <= '9'; }
 
 // idDeclModelDef::ParseAnim: scan back from the last character while digits, but never onto the first
 // character; the index where the scan stops is the last character of the alias (0 means invalid).
@@ -45,8 +41,7 @@ class DefParser {
   public:
     DefParser(std::string_view source, const std::string& fileName, text::Diagnostics& diagnostics)
         : m_src(source), m_lex(source, fileName, diagnostics) {
-        m_lex.setBackslashStringConcatenation(
-            true); // DECL_LEXER_FLAGS, e.g. monster_default.def's editor_var
+        m_lex.setBackslashStringConcatenation(true); // DECL_LEXER_FLAGS, e.g. monster_default.def's editor_var
     }
 
     DefFile parse() {
@@ -89,19 +84,17 @@ class DefParser {
         std::map<std::string, std::uint32_t, std::less<>> lineOfKey; // lower-cased key → line first written
         while (true) {
             const Token key = m_lex.next();
-            if (key.kind == TokenKind::End)
-                m_lex.fail(key, "unexpected end of file in " + where + " (missing '}')");
+            if (key.kind == TokenKind::End) m_lex.fail(key, "unexpected end of file in " + where + " (missing '}')");
             if (key.isPunct('}')) break;
             if (key.kind != TokenKind::String)
                 m_lex.fail(key, "expected a \"quoted\" key or '}' in " + where + ", found " + key.describe());
             std::string keyText(key.text);
             const Token value = m_lex.next();
             if (value.kind == TokenKind::End)
-                m_lex.fail(value,
-                           "unexpected end of file: key \"" + keyText + "\" of " + where + " has no value");
+                m_lex.fail(value, "unexpected end of file: key \"" + keyText + "\" of " + where + " has no value");
             if (value.isPunct('{') || value.isPunct('}'))
-                m_lex.fail(value, "key \"" + keyText + "\" of " + where + " has no value (found " +
-                                      value.describe() + ")");
+                m_lex.fail(value,
+                           "key \"" + keyText + "\" of " + where + " has no value (found " + value.describe() + ")");
             const auto [it, inserted] = lineOfKey.try_emplace(lowerCopy(keyText), key.line);
             if (!inserted)
                 m_lex.warn(key, "'" + keyText + "' already defined in " + where + " (line " +
@@ -125,15 +118,13 @@ class DefParser {
             if (keyword.kind == TokenKind::End)
                 m_lex.fail(keyword, "unexpected end of file in " + where + " (missing '}')");
             if (keyword.isPunct('}')) break;
-            const std::string_view word =
-                keyword.kind == TokenKind::Punct ? std::string_view{} : keyword.text;
+            const std::string_view word = keyword.kind == TokenKind::Punct ? std::string_view{} : keyword.text;
             if (word == "inherit") {
                 const Value parent = expectValue("a model decl name after 'inherit'");
                 if (anyStatement) {
                     // CopyDecl frees everything parsed so far before copying the parent.
-                    m_lex.warn(keyword, "'inherit' after other statements in " + where +
-                                            ": the engine's copy of '" + parent.text +
-                                            "' replaces them, so they are dropped");
+                    m_lex.warn(keyword, "'inherit' after other statements in " + where + ": the engine's copy of '" +
+                                            parent.text + "' replaces them, so they are dropped");
                     ModelDef reset;
                     reset.name = std::move(model.name);
                     reset.location = std::move(model.location);
@@ -148,9 +139,8 @@ class DefParser {
                 const auto dot = mesh.text.rfind('.');
                 // The engine compares the extension case-sensitively (MD5_MESH_EXT).
                 if (dot == std::string::npos || mesh.text.substr(dot + 1) != "md5mesh")
-                    m_lex.fail(mesh.token,
-                               "mesh '" + mesh.text + "' of " + where +
-                                   " is not an .md5mesh file (the engine requires that extension)");
+                    m_lex.fail(mesh.token, "mesh '" + mesh.text + "' of " + where +
+                                               " is not an .md5mesh file (the engine requires that extension)");
                 model.mesh = mesh.text;
             } else if (word == "offset") {
                 model.offset = parseOffset(where);
@@ -205,8 +195,8 @@ class DefParser {
                 m_lex.fail(t, "unexpected end of file in the joint list of channel '" + channel.name + "'");
             if (t.isPunct(')')) break;
             if (t.isPunct('{') || t.isPunct('}'))
-                m_lex.fail(t, "expected ')' to close the joint list of channel '" + channel.name +
-                                  "', found " + t.describe());
+                m_lex.fail(t, "expected ')' to close the joint list of channel '" + channel.name + "', found " +
+                                  t.describe());
             channel.joints += t.text;
             if (t.text != "*" && t.text != "-") channel.joints += ' ';
         }
@@ -220,8 +210,7 @@ class DefParser {
         std::set<std::string, std::less<>> names;
     };
 
-    ModelAnim parseAnim(const Token& keyword, const ModelDef& model, OwnAnims& own,
-                        const std::string& where) {
+    ModelAnim parseAnim(const Token& keyword, const ModelDef& model, OwnAnims& own, const std::string& where) {
         requireMesh(keyword, model, where);
         ModelAnim anim;
         anim.location = m_lex.locationOf(keyword);
@@ -239,8 +228,7 @@ class DefParser {
         do {
             Value file = expectValue("an .md5anim file for anim '" + anim.name + "'");
             if (anim.files.size() == 3)
-                m_lex.fail(file.token,
-                           "anim '" + anim.name + "' has more than 3 synced files (ANIM_MaxSyncedAnims)");
+                m_lex.fail(file.token, "anim '" + anim.name + "' has more than 3 synced files (ANIM_MaxSyncedAnims)");
             anim.files.push_back(std::move(file.text));
         } while (m_lex.acceptPunct(','));
         if (m_lex.peek().isPunct('{')) anim.block = readBlock(anim.name);
@@ -267,23 +255,18 @@ class DefParser {
         // The engine removes by name or alias; removing one of this decl's own anims is its "not inherited"
         // error.
         std::string ownAnim;
-        if (own.names.count(target))
-            ownAnim = target;
-        else if (const auto it = own.nameOfAlias.find(target); it != own.nameOfAlias.end())
-            ownAnim = it->second;
+        if (own.names.count(target)) ownAnim = target;
+        else if (const auto it = own.nameOfAlias.find(target); it != own.nameOfAlias.end()) ownAnim = it->second;
         if (!ownAnim.empty())
-            m_lex.fail(name.token, "'remove " + target + "' in " + where +
-                                       " comes after this decl's own anim '" + ownAnim +
-                                       "': the engine only removes inherited anims (drop the anim instead)");
+            m_lex.fail(name.token, "'remove " + target + "' in " + where + " comes after this decl's own anim '" +
+                                       ownAnim + "': the engine only removes inherited anims (drop the anim instead)");
         if (!model.inherit)
             m_lex.fail(name.token, "'remove " + target + "' in " + where +
                                        ", which inherits nothing: there is no inherited anim to remove");
         return target;
     }
 
-    std::size_t offsetOf(const Token& t) const {
-        return static_cast<std::size_t>(t.text.data() - m_src.data());
-    }
+    std::size_t offsetOf(const Token& t) const { return static_cast<std::size_t>(t.text.data() - m_src.data()); }
 
     std::string_view m_src;
     text::Lexer m_lex;
@@ -314,12 +297,9 @@ bool isModelChannelName(std::string_view name) {
     return false;
 }
 
-bool isValidAnimName(std::string_view name) {
-    return aliasEnd(name) > 0;
-}
+bool isValidAnimName(std::string_view name) { return aliasEnd(name) > 0; }
 
-std::optional<DefFile> parseDef(std::string_view text, const std::string& fileName,
-                                text::Diagnostics& diagnostics) {
+std::optional<DefFile> parseDef(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics) {
     try {
         DefParser parser(text, fileName, diagnostics);
         return parser.parse();

@@ -1,19 +1,17 @@
 #include "afb/decl/Library.h"
 
-#include "afb/decl/AfParser.h"
-#include "afb/text/Lexer.h"
-
 #include <algorithm>
 #include <set>
+
+#include "afb/decl/AfParser.h"
+#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace fs = std::filesystem;
 
 namespace {
 
-char lowerAscii(char c) {
-    return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
-}
+char lowerAscii(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
 
 std::string lowerCopy(std::string_view s) {
     std::string out(s);
@@ -65,9 +63,7 @@ std::optional<std::string> lookup(const std::vector<std::pair<std::string, std::
 
 } // namespace
 
-std::optional<std::string> ResolvedEntity::get(std::string_view key) const {
-    return lookup(keyValues, key);
-}
+std::optional<std::string> ResolvedEntity::get(std::string_view key) const { return lookup(keyValues, key); }
 
 // --- opening and indexing ----------------------------------------------------------------------------
 
@@ -121,9 +117,8 @@ namespace {
 // Adds `name` to `index` unless a decl of that name (case-insensitive) is there already: the engine keeps
 // the first definition and warns about the later one.
 template <class IndexMap, class Ref, class LocationOf>
-void addToIndex(IndexMap& index, std::string_view type, const std::string& name,
-                const SourceLocation& location, Ref ref, LocationOf&& locationOf,
-                text::Diagnostics& diagnostics) {
+void addToIndex(IndexMap& index, std::string_view type, const std::string& name, const SourceLocation& location,
+                Ref ref, LocationOf&& locationOf, text::Diagnostics& diagnostics) {
     const auto [it, inserted] = index.try_emplace(lowerCopy(name), ref);
     if (!inserted)
         diagnostics.warning(location, std::string(type) + " '" + name + "' is also defined at " +
@@ -135,18 +130,14 @@ void Library::indexFile(const AfSource& source, std::size_t fileIndex, text::Dia
     const auto locationOf = [this](DeclRef r) { return m_afFiles[r.file].content.decls[r.decl].location; };
     for (std::size_t i = 0; i < source.content.decls.size(); ++i) {
         const AfDecl& decl = source.content.decls[i];
-        addToIndex(m_figures, "articulatedFigure", decl.name, decl.location, DeclRef{fileIndex, i},
-                   locationOf, diagnostics);
+        addToIndex(m_figures, "articulatedFigure", decl.name, decl.location, DeclRef{fileIndex, i}, locationOf,
+                   diagnostics);
     }
 }
 
 void Library::indexFile(const DefSource& source, std::size_t fileIndex, text::Diagnostics& diagnostics) {
-    const auto entityLocation = [this](DeclRef r) {
-        return m_defFiles[r.file].content.entityDefs[r.decl].location;
-    };
-    const auto modelLocation = [this](DeclRef r) {
-        return m_defFiles[r.file].content.models[r.decl].location;
-    };
+    const auto entityLocation = [this](DeclRef r) { return m_defFiles[r.file].content.entityDefs[r.decl].location; };
+    const auto modelLocation = [this](DeclRef r) { return m_defFiles[r.file].content.models[r.decl].location; };
     for (std::size_t i = 0; i < source.content.entityDefs.size(); ++i) {
         const EntityDef& decl = source.content.entityDefs[i];
         addToIndex(m_entityDefs, "entityDef", decl.name, decl.location, DeclRef{fileIndex, i}, entityLocation,
@@ -154,8 +145,7 @@ void Library::indexFile(const DefSource& source, std::size_t fileIndex, text::Di
     }
     for (std::size_t i = 0; i < source.content.models.size(); ++i) {
         const ModelDef& decl = source.content.models[i];
-        addToIndex(m_modelDefs, "model", decl.name, decl.location, DeclRef{fileIndex, i}, modelLocation,
-                   diagnostics);
+        addToIndex(m_modelDefs, "model", decl.name, decl.location, DeclRef{fileIndex, i}, modelLocation, diagnostics);
     }
 }
 
@@ -184,15 +174,13 @@ std::optional<LibraryEntry<AfDecl>> Library::findFigure(std::string_view name) c
 
 std::vector<std::string> Library::entityDefNames() const {
     std::vector<std::string> out;
-    for (const auto& [key, ref] : m_entityDefs)
-        out.push_back(m_defFiles[ref.file].content.entityDefs[ref.decl].name);
+    for (const auto& [key, ref] : m_entityDefs) out.push_back(m_defFiles[ref.file].content.entityDefs[ref.decl].name);
     return out;
 }
 
 std::vector<std::string> Library::modelDefNames() const {
     std::vector<std::string> out;
-    for (const auto& [key, ref] : m_modelDefs)
-        out.push_back(m_defFiles[ref.file].content.models[ref.decl].name);
+    for (const auto& [key, ref] : m_modelDefs) out.push_back(m_defFiles[ref.file].content.models[ref.decl].name);
     return out;
 }
 
@@ -204,8 +192,7 @@ std::vector<std::string> Library::figureNames() const {
 
 // --- model decls ------------------------------------------------------------------------------------------
 
-std::optional<ResolvedModel> Library::resolveModel(std::string_view name,
-                                                   text::Diagnostics& diagnostics) const {
+std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::Diagnostics& diagnostics) const {
     const auto leaf = findModelDef(name);
     if (!leaf) {
         diagnostics.error({m_baseDir.string(), 0, 0}, "model decl '" + std::string(name) + "' not found");
@@ -223,8 +210,8 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name,
         if (!current->inherit) break;
         const auto parent = findModelDef(*current->inherit);
         if (!parent) {
-            diagnostics.error(current->location, "model decl '" + current->name + "' inherits '" +
-                                                     *current->inherit + "', which is not defined");
+            diagnostics.error(current->location, "model decl '" + current->name + "' inherits '" + *current->inherit +
+                                                     "', which is not defined");
             return std::nullopt;
         }
         if (seen.count(lowerCopy(parent->decl.name))) {
@@ -248,8 +235,7 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name,
         if (m.skin) flat.skin = m.skin;
         if (m.offset) flat.offset = m.offset;
         if (!flat.mesh && (!m.anims.empty() || !m.channels.empty())) {
-            diagnostics.error(m.location,
-                              where + " defines anims or channels but has no mesh, and inherits none");
+            diagnostics.error(m.location, where + " defines anims or channels but has no mesh, and inherits none");
             return std::nullopt;
         }
 
@@ -267,8 +253,7 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name,
             }
             for (const std::string& r : m.removes)
                 if (!used.count(r)) {
-                    diagnostics.error(m.location,
-                                      where + " removes anim '" + r + "', which it does not inherit");
+                    diagnostics.error(m.location, where + " removes anim '" + r + "', which it does not inherit");
                     return std::nullopt;
                 }
             flat.anims = std::move(kept);
@@ -290,19 +275,16 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name,
             }
         }
         for (const ModelChannel& c : m.channels) {
-            const auto same =
-                std::find_if(flat.channels.begin(), flat.channels.end(),
-                             [&](const ModelChannel& x) { return text::equalsIgnoreCase(x.name, c.name); });
-            if (same != flat.channels.end())
-                *same = c;
-            else
-                flat.channels.push_back(c);
+            const auto same = std::find_if(flat.channels.begin(), flat.channels.end(), [&](const ModelChannel& x) {
+                return text::equalsIgnoreCase(x.name, c.name);
+            });
+            if (same != flat.channels.end()) *same = c;
+            else flat.channels.push_back(c);
         }
     }
     if (!flat.mesh) {
-        diagnostics.error(leaf->decl.location,
-                          "model decl '" + leaf->decl.name + "' has no mesh" +
-                              (chain.size() > 1 ? " (nor does any decl it inherits)" : ""));
+        diagnostics.error(leaf->decl.location, "model decl '" + leaf->decl.name + "' has no mesh" +
+                                                   (chain.size() > 1 ? " (nor does any decl it inherits)" : ""));
         return std::nullopt;
     }
     return result;
@@ -329,18 +311,15 @@ std::vector<std::pair<std::string, std::string>> ownDict(const EntityDef& def) {
     std::map<std::string, std::size_t, std::less<>> index;
     for (const auto& [key, value] : def.keyValues) {
         const auto [it, inserted] = index.try_emplace(lowerCopy(key), dict.size());
-        if (inserted)
-            dict.emplace_back(key, value);
-        else
-            dict[it->second].second = value;
+        if (inserted) dict.emplace_back(key, value);
+        else dict[it->second].second = value;
     }
     return dict;
 }
 
 } // namespace
 
-std::optional<ResolvedEntity> Library::resolveEntity(std::string_view name,
-                                                     text::Diagnostics& diagnostics) const {
+std::optional<ResolvedEntity> Library::resolveEntity(std::string_view name, text::Diagnostics& diagnostics) const {
     const auto entry = findEntityDef(name);
     if (!entry) {
         diagnostics.error({m_baseDir.string(), 0, 0}, "entityDef '" + std::string(name) + "' not found");
@@ -360,8 +339,7 @@ std::optional<ResolvedEntity> Library::resolveEntity(std::string_view name,
 
 // Keys, merged through the inherit graph into r.keyValues and r.entityChain (diamonds are fine, cycles are
 // errors).
-bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r,
-                              text::Diagnostics& diagnostics) const {
+bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const {
     std::vector<EntityFrame> stack;
     std::set<std::string, std::less<>> visited, onPath;
     std::map<std::string, std::size_t, std::less<>> keyIndex;
@@ -390,8 +368,8 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r,
         const std::string& parentName = top.parents[top.next++];
         const auto parent = findEntityDef(parentName);
         if (!parent) {
-            diagnostics.error(top.def->location, "entityDef '" + top.def->name + "' inherits '" + parentName +
-                                                     "', which is not defined");
+            diagnostics.error(top.def->location,
+                              "entityDef '" + top.def->name + "' inherits '" + parentName + "', which is not defined");
             return false;
         }
         const std::string key = lowerCopy(parent->decl.name);
@@ -412,8 +390,7 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r,
 }
 
 // The model decl, its mesh and its af_pose (af-format §7.1).
-bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r,
-                                 text::Diagnostics& diagnostics) const {
+bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const {
     const std::string where = "entityDef '" + entity.name + "'";
     const std::optional<std::string> modelKey = nonEmpty(r.get("model"));
     if (!modelKey) {
@@ -423,12 +400,11 @@ bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r,
     }
     if (!findModelDef(*modelKey)) {
         const bool isMesh = modelKey->size() >= 8 && modelKey->substr(modelKey->size() - 8) == ".md5mesh";
-        diagnostics.error(
-            entity.location,
-            isMesh ? where + " has \"model\" '" + *modelKey +
-                         "', a mesh file, not a model decl: the engine then has no animator, so no "
-                         "af_pose and no ragdoll"
-                   : "model decl '" + *modelKey + "' (\"model\" of " + where + ") not found");
+        diagnostics.error(entity.location,
+                          isMesh ? where + " has \"model\" '" + *modelKey +
+                                       "', a mesh file, not a model decl: the engine then has no animator, so no "
+                                       "af_pose and no ragdoll"
+                                 : "model decl '" + *modelKey + "' (\"model\" of " + where + ") not found");
         return false;
     }
     std::optional<ResolvedModel> model = resolveModel(*modelKey, diagnostics);
@@ -438,10 +414,8 @@ bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r,
     r.modelName = r.model.name;
     r.modelLocation = r.model.location;
     bool ok = true;
-    if (auto mesh = contentPath(*r.model.mesh, "mesh", r.modelLocation, diagnostics))
-        r.meshPath = std::move(*mesh);
-    else
-        ok = false;
+    if (auto mesh = contentPath(*r.model.mesh, "mesh", r.modelLocation, diagnostics)) r.meshPath = std::move(*mesh);
+    else ok = false;
     return resolveAfPose(r, diagnostics) && ok;
 }
 
@@ -452,17 +426,15 @@ bool Library::resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) c
     for (const ModelAnim& a : r.model.anims)
         if (a.alias() == "af_pose") poses.push_back(&a);
     if (poses.empty()) {
-        diagnostics.error(r.modelLocation,
-                          "model decl " + r.modelName + " has no anim af_pose (a ragdoll needs it)");
+        diagnostics.error(r.modelLocation, "model decl " + r.modelName + " has no anim af_pose (a ragdoll needs it)");
         return false;
     }
     const ModelAnim* pose = r.model.findAnim("af_pose");
     if (!pose) pose = poses.front();
     if (poses.size() > 1)
-        diagnostics.warning(pose->location,
-                            "model decl " + r.modelName + " has " + std::to_string(poses.size()) +
-                                " af_pose variants (the engine picks one at random); using '" + pose->name +
-                                "'");
+        diagnostics.warning(pose->location, "model decl " + r.modelName + " has " + std::to_string(poses.size()) +
+                                                " af_pose variants (the engine picks one at random); using '" +
+                                                pose->name + "'");
     r.afPoseAnim = pose->name;
     auto path = contentPath(pose->files.front(), "af_pose anim", pose->location, diagnostics);
     if (!path) return false;
@@ -472,30 +444,27 @@ bool Library::resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) c
 
 // The figure (af-format §7.2): idAFEntity_Base reads "articulatedFigure", idActor reads "ragdoll"; idAF::Load
 // strips any extension before looking the decl up.
-bool Library::resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r,
-                                  text::Diagnostics& diagnostics) const {
+bool Library::resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const {
     const std::string where = "entityDef '" + entity.name + "'";
     const std::optional<std::string> afKey = nonEmpty(r.get("articulatedFigure"));
     const std::optional<std::string> ragdollKey = nonEmpty(r.get("ragdoll"));
     if (!afKey && !ragdollKey) {
-        diagnostics.error(entity.location, where +
-                                               " has neither \"articulatedFigure\" nor \"ragdoll\": it names "
-                                               "no figure");
+        diagnostics.error(entity.location, where + " has neither \"articulatedFigure\" nor \"ragdoll\": it names "
+                                                   "no figure");
         return false;
     }
     r.figureKey = afKey ? "articulatedFigure" : "ragdoll";
     const std::string value = afKey ? *afKey : *ragdollKey;
     const std::string figure = stripExtension(value);
     if (afKey && ragdollKey && !text::equalsIgnoreCase(figure, stripExtension(*ragdollKey)))
-        diagnostics.warning(entity.location,
-                            where + " sets both \"articulatedFigure\" '" + *afKey + "' and \"ragdoll\" '" +
-                                *ragdollKey +
-                                "'; using \"articulatedFigure\" (AF entities read it, actors "
-                                "read \"ragdoll\")");
+        diagnostics.warning(entity.location, where + " sets both \"articulatedFigure\" '" + *afKey +
+                                                 "' and \"ragdoll\" '" + *ragdollKey +
+                                                 "'; using \"articulatedFigure\" (AF entities read it, actors "
+                                                 "read \"ragdoll\")");
     const auto found = findFigure(figure);
     if (!found) {
-        diagnostics.error(entity.location, "articulatedFigure '" + figure + "' (\"" + r.figureKey + "\" '" +
-                                               value + "' of " + where + ") not found in af/");
+        diagnostics.error(entity.location, "articulatedFigure '" + figure + "' (\"" + r.figureKey + "\" '" + value +
+                                               "' of " + where + ") not found in af/");
         return false;
     }
     r.figureName = found->decl.name;
@@ -507,25 +476,22 @@ bool Library::resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r,
 // A path from a decl, relative to the content folder, made absolute; the file must exist and the path must
 // stay inside the folder (no absolute paths, no '..').
 std::optional<fs::path> Library::contentPath(const std::string& relative, const std::string& what,
-                                             const SourceLocation& where,
-                                             text::Diagnostics& diagnostics) const {
+                                             const SourceLocation& where, text::Diagnostics& diagnostics) const {
     std::string generic = relative;
     std::replace(generic.begin(), generic.end(), '\\', '/'); // the engine's file system takes both separators
     const fs::path path(generic);
     bool escapes = generic.empty() || path.has_root_name() || path.has_root_directory();
     for (const fs::path& part : path) escapes = escapes || part == "..";
     if (escapes) {
-        diagnostics.error(where,
-                          what + " path '" + relative +
-                              "' must be relative to the content folder and stay inside it (no leading '/', "
-                              "no '..')");
+        diagnostics.error(where, what + " path '" + relative +
+                                     "' must be relative to the content folder and stay inside it (no leading '/', "
+                                     "no '..')");
         return std::nullopt;
     }
     const fs::path full = (m_baseDir / path).lexically_normal();
     std::error_code ec;
     if (!fs::is_regular_file(full, ec)) {
-        diagnostics.error(where,
-                          what + " file '" + relative + "' not found (looked for " + full.string() + ")");
+        diagnostics.error(where, what + " file '" + relative + "' not found (looked for " + full.string() + ")");
         return std::nullopt;
     }
     return full;

@@ -1,14 +1,14 @@
 #include "afb/decl/Md5Anim.h"
 
-#include "Md5Common.h"
-#include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
-
 #include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <functional>
 #include <limits>
+
+#include "Md5Common.h"
+#include "afb/text/Files.h"
+#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {
@@ -39,8 +39,7 @@ class AnimParser : detail::Md5ParserBase {
         expectKeyword("MD5Version", "at the start of an md5anim file");
         const Token versionToken = m_lex.peek();
         if (m_lex.parseInt("MD5Version") != kMd5Version)
-            m_lex.fail(versionToken,
-                       "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
+            m_lex.fail(versionToken, "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
         expectKeyword("commandline", "after MD5Version");
         anim.commandline = m_lex.expectString("the commandline");
 
@@ -67,21 +66,19 @@ class AnimParser : detail::Md5ParserBase {
         const std::uint64_t maxComponents = 6 * static_cast<std::uint64_t>(numJoints);
         if (components > maxComponents)
             m_lex.fail(componentsToken, "numAnimatedComponents " + std::string(componentsToken.text) +
-                                            " is more than 6 per joint (at most " +
-                                            std::to_string(maxComponents) + " for numJoints " +
-                                            std::to_string(numJoints) + ")");
+                                            " is more than 6 per joint (at most " + std::to_string(maxComponents) +
+                                            " for numJoints " + std::to_string(numJoints) + ")");
         anim.numAnimatedComponents = static_cast<int>(components);
         // Each value of each frame needs at least a digit and a separator.
         const std::uint64_t frameBytes = kMinFrameBytes + (components > 0 ? 2 * components - 1 : 0);
         if (static_cast<std::uint64_t>(numFrames) * frameBytes > bytesAfter(componentsToken))
-            m_lex.fail(framesToken, "numFrames " + std::string(framesToken.text) +
-                                        " with numAnimatedComponents " + std::string(componentsToken.text) +
+            m_lex.fail(framesToken, "numFrames " + std::string(framesToken.text) + " with numAnimatedComponents " +
+                                        std::string(componentsToken.text) +
                                         " values each is more than the file can hold");
 
         anim.hierarchy.reserve(reserveFor(numJoints));
-        parseBlock("hierarchy", numJoints, "numJoints", [&](int i) {
-            anim.hierarchy.push_back(parseHierarchyEntry(i, anim.numAnimatedComponents));
-        });
+        parseBlock("hierarchy", numJoints, "numJoints",
+                   [&](int i) { anim.hierarchy.push_back(parseHierarchyEntry(i, anim.numAnimatedComponents)); });
         anim.bounds.reserve(reserveFor(numFrames));
         parseBlock("bounds", numFrames, "numFrames", [&](int) {
             Md5Bounds b;
@@ -98,8 +95,7 @@ class AnimParser : detail::Md5ParserBase {
         });
 
         anim.frames.reserve(reserveFor(numFrames));
-        for (int k = 0; k < numFrames; ++k)
-            anim.frames.push_back(parseFrame(k, numFrames, anim.numAnimatedComponents));
+        for (int k = 0; k < numFrames; ++k) anim.frames.push_back(parseFrame(k, numFrames, anim.numAnimatedComponents));
         if (!m_lex.atEnd()) {
             const Token t = m_lex.next();
             if (t.isName("frame")) m_lex.fail(t, "more frames than numFrames " + std::to_string(numFrames));
@@ -116,9 +112,8 @@ class AnimParser : detail::Md5ParserBase {
         m_lex.expectPunct('{', "after '" + std::string(name) + "'");
         for (int i = 0; i < count; ++i) {
             if (m_lex.peek().isPunct('}'))
-                m_lex.fail(m_lex.peek(), "the " + std::string(name) + " block ends after " +
-                                             std::to_string(i) + " lines, but " + std::string(countName) +
-                                             " is " + std::to_string(count));
+                m_lex.fail(m_lex.peek(), "the " + std::string(name) + " block ends after " + std::to_string(i) +
+                                             " lines, but " + std::string(countName) + " is " + std::to_string(count));
             parseLine(i);
         }
         const Token close = m_lex.next();
@@ -134,21 +129,19 @@ class AnimParser : detail::Md5ParserBase {
         const Token parentToken = m_lex.peek();
         const std::int64_t parent = m_lex.parseInt("the parent joint index");
         if (index == 0 && parent != -1)
-            m_lex.fail(parentToken, "joint 0 " + quotedName(e.name) + " has parent " +
-                                        std::to_string(parent) +
+            m_lex.fail(parentToken, "joint 0 " + quotedName(e.name) + " has parent " + std::to_string(parent) +
                                         ": the first joint must be the root (parent -1)");
         if (index > 0 && (parent < 0 || parent >= index))
-            m_lex.fail(parentToken,
-                       "joint " + std::to_string(index) + " " + quotedName(e.name) + " has parent " +
-                           std::to_string(parent) + ": only joint 0 may be a root, and parents must " +
-                           "precede children (a parent index 0.." + std::to_string(index - 1) + ")");
+            m_lex.fail(parentToken, "joint " + std::to_string(index) + " " + quotedName(e.name) + " has parent " +
+                                        std::to_string(parent) + ": only joint 0 may be a root, and parents must " +
+                                        "precede children (a parent index 0.." + std::to_string(index - 1) + ")");
         e.parent = static_cast<int>(parent);
 
         const Token flagsToken = m_lex.peek();
         const std::int64_t flags = m_lex.parseInt("the joint's component flags");
         if (flags < 0 || flags > kMd5AllComponents)
-            m_lex.fail(flagsToken, "joint " + std::to_string(index) + " " + quotedName(e.name) +
-                                       " has flags " + std::to_string(flags) + ", out of range 0..63");
+            m_lex.fail(flagsToken, "joint " + std::to_string(index) + " " + quotedName(e.name) + " has flags " +
+                                       std::to_string(flags) + ", out of range 0..63");
         e.flags = static_cast<int>(flags);
 
         const Token startToken = m_lex.peek();
@@ -156,9 +149,8 @@ class AnimParser : detail::Md5ParserBase {
         const int used = animatedComponentCount(e.flags);
         if (start < 0 || start + used > numComponents)
             m_lex.fail(startToken, "joint " + std::to_string(index) + " " + quotedName(e.name) + " reads " +
-                                       std::to_string(used) + " components from start index " +
-                                       std::to_string(start) + ", past numAnimatedComponents " +
-                                       std::to_string(numComponents));
+                                       std::to_string(used) + " components from start index " + std::to_string(start) +
+                                       ", past numAnimatedComponents " + std::to_string(numComponents));
         e.startIndex = static_cast<int>(start);
         return e;
     }
@@ -169,22 +161,19 @@ class AnimParser : detail::Md5ParserBase {
         if (t.kind == TokenKind::End)
             m_lex.fail(t, "the file ends after " + std::to_string(k) + " frames, but numFrames is " +
                               std::to_string(numFrames));
-        if (!t.isName("frame"))
-            m_lex.fail(t, "expected 'frame " + std::to_string(k) + "', found " + t.describe());
+        if (!t.isName("frame")) m_lex.fail(t, "expected 'frame " + std::to_string(k) + "', found " + t.describe());
         const Token indexToken = m_lex.peek();
-        const std::uint64_t index =
-            m_lex.parseCount("frame index", std::numeric_limits<std::uint64_t>::max());
+        const std::uint64_t index = m_lex.parseCount("frame index", std::numeric_limits<std::uint64_t>::max());
         if (index != static_cast<std::uint64_t>(k))
-            m_lex.fail(indexToken, "frame index " + std::string(indexToken.text) + " should be " +
-                                       std::to_string(k) + " (frames are numbered 0, 1, 2, ... in order)");
+            m_lex.fail(indexToken, "frame index " + std::string(indexToken.text) + " should be " + std::to_string(k) +
+                                       " (frames are numbered 0, 1, 2, ... in order)");
         m_lex.expectPunct('{', "after 'frame " + std::to_string(k) + "'");
         std::vector<double> values;
         values.reserve(reserveFor(numComponents));
         for (int i = 0; i < numComponents; ++i) {
             if (m_lex.peek().isPunct('}'))
                 m_lex.fail(m_lex.peek(), "frame " + std::to_string(k) + " has " + std::to_string(i) +
-                                             " values, but numAnimatedComponents is " +
-                                             std::to_string(numComponents));
+                                             " values, but numAnimatedComponents is " + std::to_string(numComponents));
             values.push_back(m_lex.parseFloat("a frame value"));
         }
         const Token close = m_lex.next();
@@ -192,18 +181,14 @@ class AnimParser : detail::Md5ParserBase {
             m_lex.fail(close, "frame " + std::to_string(k) + " has more values than numAnimatedComponents " +
                                   std::to_string(numComponents));
         if (!close.isPunct('}'))
-            m_lex.fail(close,
-                       "expected '}' closing frame " + std::to_string(k) + ", found " + close.describe());
+            m_lex.fail(close, "expected '}' closing frame " + std::to_string(k) + ", found " + close.describe());
         return values;
     }
-
 };
 
 } // namespace
 
-int animatedComponentCount(int flags) {
-    return std::popcount(static_cast<unsigned>(flags & kMd5AllComponents));
-}
+int animatedComponentCount(int flags) { return std::popcount(static_cast<unsigned>(flags & kMd5AllComponents)); }
 
 std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh) {
     if (anim.hierarchy.size() != mesh.joints.size())
@@ -216,8 +201,8 @@ std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh&
             return "joint " + std::to_string(i) + " is " + quotedName(a.name) + " in the anim but " +
                    quotedName(m.name) + " in the mesh (names are compared case-sensitively)";
         if (a.parent != m.parent)
-            return "joint " + std::to_string(i) + " " + quotedName(a.name) + " has parent " +
-                   std::to_string(a.parent) + " in the anim but " + std::to_string(m.parent) + " in the mesh";
+            return "joint " + std::to_string(i) + " " + quotedName(a.name) + " has parent " + std::to_string(a.parent) +
+                   " in the anim but " + std::to_string(m.parent) + " in the mesh";
     }
     return std::nullopt;
 }

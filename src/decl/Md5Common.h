@@ -29,8 +29,8 @@ class Md5ParserBase {
     void expectKeyword(std::string_view keyword, std::string_view context) {
         const text::Token t = m_lex.next();
         if (!t.isName(keyword))
-            m_lex.fail(t, "expected '" + std::string(keyword) + "' " + std::string(context) + ", found " +
-                              t.describe());
+            m_lex.fail(t,
+                       "expected '" + std::string(keyword) + "' " + std::string(context) + ", found " + t.describe());
     }
 
     /// Bytes of input after `t`, a number token (its text lies in the source).

@@ -1,13 +1,13 @@
 #include "afb/decl/Md5Mesh.h"
 
-#include "Md5Common.h"
-#include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
-
 #include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <limits>
+
+#include "Md5Common.h"
+#include "afb/text/Files.h"
+#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {
@@ -42,8 +42,7 @@ class MeshParser : detail::Md5ParserBase {
         expectKeyword("MD5Version", "at the start of an md5mesh file");
         const Token versionToken = m_lex.peek();
         if (m_lex.parseInt("MD5Version") != kMd5Version)
-            m_lex.fail(versionToken,
-                       "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
+            m_lex.fail(versionToken, "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
         expectKeyword("commandline", "after MD5Version");
         mesh.commandline = m_lex.expectString("the commandline");
         expectKeyword("numJoints", "after commandline");
@@ -62,8 +61,8 @@ class MeshParser : detail::Md5ParserBase {
         }
         const Token close = m_lex.next();
         if (!close.isPunct('}'))
-            m_lex.fail(close, "expected '}' closing the joints block after numJoints " +
-                                  std::to_string(numJoints) + " joints, found " + close.describe() +
+            m_lex.fail(close, "expected '}' closing the joints block after numJoints " + std::to_string(numJoints) +
+                                  " joints, found " + close.describe() +
                                   (close.kind == TokenKind::String ? " (more joints than numJoints)" : ""));
 
         mesh.meshes.reserve(reserveFor(numMeshes));
@@ -79,8 +78,7 @@ class MeshParser : detail::Md5ParserBase {
         }
         if (!m_lex.atEnd()) {
             const Token t = m_lex.next();
-            if (t.isName("mesh"))
-                m_lex.fail(t, "more mesh blocks than numMeshes " + std::to_string(numMeshes));
+            if (t.isName("mesh")) m_lex.fail(t, "more mesh blocks than numMeshes " + std::to_string(numMeshes));
             m_lex.fail(t, "unexpected " + t.describe() + " after the last mesh block");
         }
         return mesh;
@@ -100,9 +98,8 @@ class MeshParser : detail::Md5ParserBase {
         const Token t = m_lex.peek();
         const std::uint64_t n = m_lex.parseCount(what, std::numeric_limits<std::uint64_t>::max());
         if (n != static_cast<std::uint64_t>(expected))
-            m_lex.fail(t, std::string(what) + " " + std::string(t.text) + " should be " +
-                              std::to_string(expected) + " ('" + std::string(lineKeyword) +
-                              "' lines are numbered 0, 1, 2, ... in order)");
+            m_lex.fail(t, std::string(what) + " " + std::string(t.text) + " should be " + std::to_string(expected) +
+                              " ('" + std::string(lineKeyword) + "' lines are numbered 0, 1, 2, ... in order)");
     }
 
     // The keyword starting line `index` of a list announced by `countName count`.
@@ -110,8 +107,7 @@ class MeshParser : detail::Md5ParserBase {
         const Token t = m_lex.next();
         if (!t.isName(keyword))
             m_lex.fail(t, "expected '" + std::string(keyword) + "' line " + std::to_string(index) + " of " +
-                              std::string(countName) + " " + std::to_string(count) + ", found " +
-                              t.describe());
+                              std::string(countName) + " " + std::to_string(count) + ", found " + t.describe());
     }
 
     // The keyword after a list: a further line of the list means its count was too small.
@@ -119,12 +115,12 @@ class MeshParser : detail::Md5ParserBase {
                          int count) {
         const Token t = m_lex.next();
         if (t.isName(listKeyword))
-            m_lex.fail(t, "more '" + std::string(listKeyword) + "' lines than " + std::string(countName) +
-                              " " + std::to_string(count));
+            m_lex.fail(t, "more '" + std::string(listKeyword) + "' lines than " + std::string(countName) + " " +
+                              std::to_string(count));
         if (!t.isName(keyword))
-            m_lex.fail(t, "expected '" + std::string(keyword) + "' after the " + std::string(countName) +
-                              " " + std::to_string(count) + " '" + std::string(listKeyword) +
-                              "' lines, found " + t.describe());
+            m_lex.fail(t, "expected '" + std::string(keyword) + "' after the " + std::string(countName) + " " +
+                              std::to_string(count) + " '" + std::string(listKeyword) + "' lines, found " +
+                              t.describe());
     }
 
     Md5Joint parseJoint(int index) {
@@ -135,8 +131,8 @@ class MeshParser : detail::Md5ParserBase {
         // The engine only checks `parent < numJoints - 1`, but computes each joint's local transform from its
         // parent's, so the parent must already be known (af-format §7.3, §8 item 21).
         if (parent < -1 || parent >= index)
-            m_lex.fail(parentToken, "joint " + std::to_string(index) + " " + quotedName(joint.name) +
-                                        " has parent " + std::to_string(parent) +
+            m_lex.fail(parentToken, "joint " + std::to_string(index) + " " + quotedName(joint.name) + " has parent " +
+                                        std::to_string(parent) +
                                         ": parents must precede children (a parent index below " +
                                         std::to_string(index) + ", or -1 for a root)");
         joint.parent = static_cast<int>(parent);
@@ -154,8 +150,7 @@ class MeshParser : detail::Md5ParserBase {
             t = m_lex.next();
         }
         if (!t.isName("shader"))
-            m_lex.fail(t, "expected 'shader' in mesh block " + std::to_string(meshIndex) + ", found " +
-                              t.describe());
+            m_lex.fail(t, "expected 'shader' in mesh block " + std::to_string(meshIndex) + ", found " + t.describe());
         sub.shader = m_lex.expectString("the shader name");
 
         expectKeyword("numverts", "after the shader");
@@ -181,8 +176,7 @@ class MeshParser : detail::Md5ParserBase {
                                            std::to_string(firstWeight));
             if (weightCount < 1)
                 m_lex.fail(countToken, "vertex " + std::to_string(i) + " has no weights (weight count " +
-                                           std::to_string(weightCount) +
-                                           "); every vertex needs at least one");
+                                           std::to_string(weightCount) + "); every vertex needs at least one");
             vert.firstWeight = static_cast<int>(firstWeight);
             vert.weightCount = static_cast<int>(weightCount);
             sub.verts.push_back(vert);
@@ -228,8 +222,8 @@ class MeshParser : detail::Md5ParserBase {
         if (close.isName("weight"))
             m_lex.fail(close, "more 'weight' lines than numweights " + std::to_string(numWeights));
         if (!close.isPunct('}'))
-            m_lex.fail(close, "expected '}' closing mesh block " + std::to_string(meshIndex) + ", found " +
-                                  close.describe());
+            m_lex.fail(close,
+                       "expected '}' closing mesh block " + std::to_string(meshIndex) + ", found " + close.describe());
 
         // Weight ranges can only be checked once numweights is known.
         for (std::size_t i = 0; i < sub.verts.size(); ++i) {
@@ -238,12 +232,10 @@ class MeshParser : detail::Md5ParserBase {
             if (end > numWeights)
                 failAt(firstWeightAt[i], "vertex " + std::to_string(i) + " uses weights " +
                                              std::to_string(v.firstWeight) + ".." + std::to_string(end - 1) +
-                                             ", out of range (numweights " + std::to_string(numWeights) +
-                                             ")");
+                                             ", out of range (numweights " + std::to_string(numWeights) + ")");
         }
         return sub;
     }
-
 };
 
 } // namespace

@@ -1,14 +1,14 @@
 // Canonical `.md5mesh` and `.md5anim` text (af-format §7.3, §7.4): the inverse of parseMd5Mesh and
 // parseMd5Anim, laid out as the id exporters lay them out (one entry a line, tab-indented blocks).
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
 
 namespace afb::decl {
 namespace {
@@ -29,22 +29,18 @@ std::string num(double v) {
     return std::string(buf, end);
 }
 
-std::string vec(const Vec3& v) {
-    return "( " + num(v.x) + " " + num(v.y) + " " + num(v.z) + " )";
-}
+std::string vec(const Vec3& v) { return "( " + num(v.x) + " " + num(v.y) + " " + num(v.z) + " )"; }
 
 // md5 strings have no escapes: a quote or a line break cannot be written inside one.
 std::string quoted(const std::string& s, const char* what) {
     if (s.find_first_of(std::string_view("\"\n\r\0", 4)) != std::string::npos)
-        throw std::invalid_argument(
-            std::string(what) + " \"" + s.substr(0, 60) +
-            "\" holds a quote, a line break or a NUL byte, which md5 text cannot hold");
+        throw std::invalid_argument(std::string(what) + " \"" + s.substr(0, 60) +
+                                    "\" holds a quote, a line break or a NUL byte, which md5 text cannot hold");
     return "\"" + s + "\"";
 }
 
 std::string header(int version, const std::string& commandline) {
-    return "MD5Version " + std::to_string(version) + "\ncommandline " +
-           quoted(commandline, "the commandline") + "\n\n";
+    return "MD5Version " + std::to_string(version) + "\ncommandline " + quoted(commandline, "the commandline") + "\n\n";
 }
 
 void writeSubMesh(std::string& out, const Md5SubMesh& m) {
@@ -60,8 +56,8 @@ void writeSubMesh(std::string& out, const Md5SubMesh& m) {
     out += "\n\tnumtris " + std::to_string(m.tris.size()) + "\n";
     for (std::size_t i = 0; i < m.tris.size(); ++i) {
         const Md5Tri& t = m.tris[i];
-        out += "\ttri " + std::to_string(i) + " " + std::to_string(t.v[0]) + " " + std::to_string(t.v[1]) +
-               " " + std::to_string(t.v[2]) + "\n";
+        out += "\ttri " + std::to_string(i) + " " + std::to_string(t.v[0]) + " " + std::to_string(t.v[1]) + " " +
+               std::to_string(t.v[2]) + "\n";
     }
     out += "\n\tnumweights " + std::to_string(m.weights.size()) + "\n";
     for (std::size_t i = 0; i < m.weights.size(); ++i) {
@@ -78,10 +74,8 @@ void writeFrame(std::string& out, std::size_t index, const std::vector<double>& 
                 const std::vector<bool>& lineStarts) {
     out += "\nframe " + std::to_string(index) + " {\n";
     for (std::size_t i = 0; i < values.size(); ++i) {
-        if (lineStarts[i])
-            out += (i == 0 ? "\t" : "\n\t");
-        else
-            out += " ";
+        if (lineStarts[i]) out += (i == 0 ? "\t" : "\n\t");
+        else out += " ";
         out += num(values[i]);
     }
     if (!values.empty()) out += "\n";
@@ -89,9 +83,7 @@ void writeFrame(std::string& out, std::size_t index, const std::vector<double>& 
 }
 
 void checkAnimCounts(const Md5Anim& anim) {
-    const auto describe = [](const char* what, std::size_t n) {
-        return std::string(what) + std::to_string(n);
-    };
+    const auto describe = [](const char* what, std::size_t n) { return std::string(what) + std::to_string(n); };
     if (anim.baseframe.size() != anim.hierarchy.size())
         throw std::invalid_argument(describe("md5anim: baseframe entries ", anim.baseframe.size()) +
                                     describe(" differ from hierarchy entries ", anim.hierarchy.size()));
@@ -100,21 +92,21 @@ void checkAnimCounts(const Md5Anim& anim) {
                                     describe(" differ from frames ", anim.frames.size()));
     for (std::size_t k = 0; k < anim.frames.size(); ++k)
         if (anim.frames[k].size() != static_cast<std::size_t>(std::max(anim.numAnimatedComponents, 0)))
-            throw std::invalid_argument(
-                describe("md5anim: frame ", k) + describe(" has values ", anim.frames[k].size()) +
-                " but numAnimatedComponents is " + std::to_string(anim.numAnimatedComponents));
+            throw std::invalid_argument(describe("md5anim: frame ", k) +
+                                        describe(" has values ", anim.frames[k].size()) +
+                                        " but numAnimatedComponents is " + std::to_string(anim.numAnimatedComponents));
 }
 
 } // namespace
 
 std::string writeMd5Mesh(const Md5Mesh& mesh) {
     std::string out = header(mesh.version, mesh.commandline);
-    out += "numJoints " + std::to_string(mesh.joints.size()) + "\nnumMeshes " +
-           std::to_string(mesh.meshes.size()) + "\n\n";
+    out += "numJoints " + std::to_string(mesh.joints.size()) + "\nnumMeshes " + std::to_string(mesh.meshes.size()) +
+           "\n\n";
     out += "joints {\n";
     for (const Md5Joint& j : mesh.joints)
-        out += "\t" + quoted(j.name, "the joint name") + "\t" + std::to_string(j.parent) + " " +
-               vec(j.position) + " " + vec(j.orientation) + "\n";
+        out += "\t" + quoted(j.name, "the joint name") + "\t" + std::to_string(j.parent) + " " + vec(j.position) + " " +
+               vec(j.orientation) + "\n";
     out += "}\n";
     for (const Md5SubMesh& m : mesh.meshes) writeSubMesh(out, m);
     return out;
@@ -123,9 +115,9 @@ std::string writeMd5Mesh(const Md5Mesh& mesh) {
 std::string writeMd5Anim(const Md5Anim& anim) {
     checkAnimCounts(anim);
     std::string out = header(anim.version, anim.commandline);
-    out += "numFrames " + std::to_string(anim.frames.size()) + "\nnumJoints " +
-           std::to_string(anim.hierarchy.size()) + "\nframeRate " + std::to_string(anim.frameRate) +
-           "\nnumAnimatedComponents " + std::to_string(anim.numAnimatedComponents) + "\n\n";
+    out += "numFrames " + std::to_string(anim.frames.size()) + "\nnumJoints " + std::to_string(anim.hierarchy.size()) +
+           "\nframeRate " + std::to_string(anim.frameRate) + "\nnumAnimatedComponents " +
+           std::to_string(anim.numAnimatedComponents) + "\n\n";
     out += "hierarchy {\n";
     for (const Md5HierarchyEntry& e : anim.hierarchy)
         out += "\t" + quoted(e.name, "the joint name") + "\t" + std::to_string(e.parent) + " " +
@@ -133,8 +125,7 @@ std::string writeMd5Anim(const Md5Anim& anim) {
     out += "}\n\nbounds {\n";
     for (const Md5Bounds& b : anim.bounds) out += "\t" + vec(b.min) + " " + vec(b.max) + "\n";
     out += "}\n\nbaseframe {\n";
-    for (const Md5BaseJoint& j : anim.baseframe)
-        out += "\t" + vec(j.position) + " " + vec(j.orientation) + "\n";
+    for (const Md5BaseJoint& j : anim.baseframe) out += "\t" + vec(j.position) + " " + vec(j.orientation) + "\n";
     out += "}\n";
 
     const auto numComponents = static_cast<std::size_t>(std::max(anim.numAnimatedComponents, 0));

@@ -37,8 +37,7 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
     case ShapeType::Dodecahedron: w.polytope = makeDodecahedron(v1, v2); break;
     case ShapeType::Cylinder:
     case ShapeType::Cone: {
-        const ShapeBuild sb =
-            type == ShapeType::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
+        const ShapeBuild sb = type == ShapeType::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
         w.polytope = sb.polytope;
         w.sidesUsed = sb.effectiveSides;
         if (sb.clamped)
@@ -62,8 +61,8 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
     // §2.2: mass properties at density 1 give the local COM c; the body origin moves to origin + R·c.
     const MassProperties unit = computeMassProperties(w.polytope, 1.0);
     if (!(unit.volume > 0.0) || !std::isfinite(unit.volume)) {
-        error(b.location, what + ": the shape has " + (unit.volume == 0.0 ? "zero" : "negative") +
-                              " volume (" + fmt(unit.volume) +
+        error(b.location, what + ": the shape has " + (unit.volume == 0.0 ? "zero" : "negative") + " volume (" +
+                              fmt(unit.volume) +
                               " cubic units; inverted bounds or a degenerate shape); the engine falls back "
                               "to mass 1 with identity inertia");
         return;
@@ -126,10 +125,11 @@ decl::BodyFriction Builder::friction(const Work& w) {
         valid(physicsDefault, true) ? physicsDefault : decl::BodyFriction{0.005, 0.005, 0.8};
     const decl::BodyFriction f = w.decl->friction.value_or(st.friction);
     if (valid(f, false)) return f;
-    warning(w.decl->location, "body '" + w.decl->name + "': friction " + fmt(f.linear) + ", " + fmt(f.angular) +
-                                  ", " + fmt(f.contact) + " is out of range (linear and angular in [0, 1], "
-                                  "contact >= 0); the engine uses " + fmt(fallback.linear) + ", " +
-                                  fmt(fallback.angular) + ", " + fmt(fallback.contact));
+    warning(w.decl->location, "body '" + w.decl->name + "': friction " + fmt(f.linear) + ", " + fmt(f.angular) + ", " +
+                                  fmt(f.contact) +
+                                  " is out of range (linear and angular in [0, 1], "
+                                  "contact >= 0); the engine uses " +
+                                  fmt(fallback.linear) + ", " + fmt(fallback.angular) + ", " + fmt(fallback.contact));
     return fallback;
 }
 
@@ -165,8 +165,7 @@ FigureBody Builder::finishBody(std::size_t k) {
     // Principal axes: built-in shapes are already diagonal; inertiaScale may not be (§3.2).
     Matrix3d q = Matrix3d::Identity();
     Vector3d moments = w.inertia.diagonal();
-    const double offDiagonal =
-        std::abs(w.inertia(0, 1)) + std::abs(w.inertia(0, 2)) + std::abs(w.inertia(1, 2));
+    const double offDiagonal = std::abs(w.inertia(0, 1)) + std::abs(w.inertia(0, 2)) + std::abs(w.inertia(1, 2));
     if (offDiagonal > 1e-12 * w.inertia.diagonal().cwiseAbs().maxCoeff()) {
         Eigen::SelfAdjointEigenSolver<Matrix3d> eig(w.inertia);
         q = eig.eigenvectors();

@@ -60,17 +60,16 @@ void Builder::buildConstraint(std::size_t i) {
     } else {
         out.body2 = -1;
         if (!text::equalsIgnoreCase(name2, "world"))
-            warning(c.location, what + ": body2 \"" + name2 +
-                                    "\" matches no body, so the constraint attaches to the world");
+            warning(c.location,
+                    what + ": body2 \"" + name2 + "\" matches no body, so the constraint attaches to the world");
     }
     if (out.body1 == out.body2) {
         error(c.location, what + ": body1 and body2 are the same body '" + name1 + "'");
         return;
     }
     const FigureBody& body1 = m_figure.bodies[static_cast<std::size_t>(out.body1)];
-    const Matrix3d ref = out.body2 >= 0
-                             ? m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation
-                             : Matrix3d::Identity();
+    const Matrix3d ref =
+        out.body2 >= 0 ? m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation : Matrix3d::Identity();
     auto point = [&](const std::optional<AfVector>& v) -> Vector3d {
         return (v ? eval(*v, c.location, what) : Vector3d::Zero()) * s();
     };
@@ -87,9 +86,7 @@ void Builder::buildConstraint(std::size_t i) {
 
     Transform frame; // model space, metres; origin = anchor
     switch (out.type) {
-    case JointType::Fixed:
-        frame = body1.loadPose;
-        break;
+    case JointType::Fixed: frame = body1.loadPose; break;
     case JointType::BallAndSocket:
         frame = {ref, point(c.anchor)};
         out.limit = limit(c, out, what, std::nullopt);
@@ -113,8 +110,7 @@ void Builder::buildConstraint(std::size_t i) {
         const auto axis = direction(c.axis, "axis");
         if (!axis) return;
         frame = {frameWithAxis(*axis, 2), point(c.anchor)};
-        if (const auto* h = std::get_if<decl::HingeLimit>(&c.limit))
-            out.limit = hingeRange(*h, axis->norm(), c, what);
+        if (const auto* h = std::get_if<decl::HingeLimit>(&c.limit)) out.limit = hingeRange(*h, axis->norm(), c, what);
         break;
     }
     case JointType::Slider: {
@@ -142,7 +138,7 @@ void Builder::buildConstraint(std::size_t i) {
 
 // Cone and pyramid limits (§4.3, §4.4): the shaft is fixed in body1, the axis or basis in body2.
 Limit Builder::limit(const AfConstraint& c, const FigureConstraint& out, const std::string& what,
-                      std::optional<Vector3d> shaftModel) {
+                     std::optional<Vector3d> shaftModel) {
     auto shaftOf = [&](const std::optional<AfVector>& v) -> std::optional<Vector3d> {
         if (shaftModel) return shaftModel;
         const Vector3d d = v ? eval(*v, c.location, what) : Vector3d::Zero();
@@ -217,8 +213,7 @@ bool Builder::spring(const AfConstraint& c, FigureConstraint& out, const std::st
     const double damping = need(c.damping, "damping"), rest = need(c.restLength, "restLength");
     const double minL = c.minLength.value_or(0.0), maxL = c.maxLength.value_or(0.0);
     if (!ok) return false;
-    if (stretch < 0 || compress < 0 || damping < 0 || rest < 0 || minL < 0 || maxL < 0 ||
-        (maxL > 0 && maxL < minL)) {
+    if (stretch < 0 || compress < 0 || damping < 0 || rest < 0 || minL < 0 || maxL < 0 || (maxL > 0 && maxL < minL)) {
         error(c.location, what + ": spring values must be >= 0 and maxLength >= minLength (engine asserts)");
         return false;
     }

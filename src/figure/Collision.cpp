@@ -1,7 +1,8 @@
+#include "afb/figure/Collision.h"
+
 #include <algorithm>
 #include <limits>
 
-#include "afb/figure/Collision.h"
 #include "afb/figure/Polytope.h"
 
 namespace afb::figure {

@@ -49,9 +49,8 @@ void Builder::mapContainedJoints() {
         }
         for (const auto& [owner, joints] : takenFrom)
             warning(b.location, "body '" + b.name + "' contains joints that body '" +
-                                    m_figure.bodies[static_cast<std::size_t>(owner)].name +
-                                    "' contains too (" + joints + "); the later body '" + b.name +
-                                    "' takes their impacts");
+                                    m_figure.bodies[static_cast<std::size_t>(owner)].name + "' contains too (" +
+                                    joints + "); the later body '" + b.name + "' takes their impacts");
     }
     for (auto& body : m_figure.bodies) {
         std::sort(body.containedJoints.begin(), body.containedJoints.end());

@@ -55,16 +55,16 @@ static_assert(kContentsSolid == decl::kContentsSolid && kContentsPlayerClip == d
               kContentsCorpse == decl::kContentsCorpse);
 
 Builder::Builder(const FigureInput& in, text::Diagnostics& findings)
-    : m_decl(*in.decl), m_skel(*in.skeleton), m_units(in.units), m_findings(findings),
-      m_figure{.name = in.decl->name,
-               .units = in.units,
-               .skeleton = *in.skeleton,
-               .bodies = {},
-               .constraints = {},
-               .selfCollision = true,
-               .rest = {},
-               .jointBody = {},
-               .totalMassKg = 0} {}
+    : m_decl(*in.decl), m_skel(*in.skeleton), m_units(in.units),
+      m_findings(findings), m_figure{.name = in.decl->name,
+                                     .units = in.units,
+                                     .skeleton = *in.skeleton,
+                                     .bodies = {},
+                                     .constraints = {},
+                                     .selfCollision = true,
+                                     .rest = {},
+                                     .jointBody = {},
+                                     .totalMassKg = 0} {}
 
 std::optional<Figure> Builder::build() {
     const std::size_t errorsBefore = m_findings.errorCount();
@@ -116,8 +116,7 @@ std::vector<std::size_t> Builder::bodyOrder() {
     return order;
 }
 
-std::optional<int> Builder::joint(const std::string& name, const text::SourceLocation& at,
-                                  const std::string& what) {
+std::optional<int> Builder::joint(const std::string& name, const text::SourceLocation& at, const std::string& what) {
     if (auto j = m_skel.findJoint(name)) return j;
     error(at, what + ": joint \"" + name + "\" not found in the skeleton");
     return std::nullopt;

@@ -66,8 +66,7 @@ class Builder {
 
     // FigureBuilder.cpp
     std::vector<std::size_t> bodyOrder();
-    std::optional<int> joint(const std::string& name, const text::SourceLocation& at,
-                             const std::string& what);
+    std::optional<int> joint(const std::string& name, const text::SourceLocation& at, const std::string& what);
     Vector3d eval(const AfVector& v, const text::SourceLocation& at, const std::string& what);
     void applyRestRules(const decl::AfSettingsValues& st);
 
@@ -88,8 +87,7 @@ class Builder {
     void buildConstraint(std::size_t i);
     Limit limit(const AfConstraint& c, const FigureConstraint& out, const std::string& what,
                 std::optional<Vector3d> shaftModel);
-    Limit hingeRange(const decl::HingeLimit& h, double axisLength, const AfConstraint& c,
-                     const std::string& what);
+    Limit hingeRange(const decl::HingeLimit& h, double axisLength, const AfConstraint& c, const std::string& what);
     bool spring(const AfConstraint& c, FigureConstraint& out, const std::string& what);
 
     // Findings.cpp

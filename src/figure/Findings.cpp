@@ -26,9 +26,9 @@ void Builder::lintLimitAtLoadPose(const FigureConstraint& c, const std::string& 
                                 " deg: it is pushed in at once");
     if (const auto* pyramid = std::get_if<PyramidLimit>(&c.limit); pyramid && excess > 1e-6) {
         const Eigen::Vector2d a = pyramidPlanarAnglesRad(*pyramid, body1, body2);
-        warning(c.location, what + ": the shaft starts outside the pyramid (" + deg(a.x()) + ", " +
-                                deg(a.y()) + " deg from its axis; limits " + deg(pyramid->halfAngle1Rad) +
-                                ", " + deg(pyramid->halfAngle2Rad) + " deg): it is pushed in at once");
+        warning(c.location, what + ": the shaft starts outside the pyramid (" + deg(a.x()) + ", " + deg(a.y()) +
+                                " deg from its axis; limits " + deg(pyramid->halfAngle1Rad) + ", " +
+                                deg(pyramid->halfAngle2Rad) + " deg): it is pushed in at once");
     }
     if (const auto* hinge = std::get_if<HingeRange>(&c.limit); hinge && excess > 1e-9)
         warning(c.location, what + ": the limit [" + deg(hinge->lowerRad) + ", " + deg(hinge->upperRad) +
@@ -43,8 +43,8 @@ void Builder::checkFigure() {
         for (const auto& it : items) {
             const auto [pos, fresh] = seen.emplace(lower(it.name), it.name);
             if (!fresh && pos->second != it.name)
-                error(it.location, std::string(what) + " '" + it.name + "' differs only in case from '" +
-                                       pos->second + "': the engine's lookup merges them");
+                error(it.location, std::string(what) + " '" + it.name + "' differs only in case from '" + pos->second +
+                                       "': the engine's lookup merges them");
         }
     };
     caseClash(m_decl.bodies, "body");
@@ -65,8 +65,8 @@ void Builder::checkFigure() {
         const FigureBody& b = m_figure.bodies[static_cast<std::size_t>(c.body2)];
         const double ratio = std::max(a.massKg, b.massKg) / std::min(a.massKg, b.massKg);
         if (ratio > 10.0)
-            warning(c.location, std::string(toString(c.type)) + " '" + c.name + "' joins masses " +
-                                    fmt(a.massKg) + " and " + fmt(b.massKg) +
+            warning(c.location, std::string(toString(c.type)) + " '" + c.name + "' joins masses " + fmt(a.massKg) +
+                                    " and " + fmt(b.massKg) +
                                     " (more than 10:1): the solver struggles with such ratios");
     }
     // Self-colliding pairs that overlap or touch at the load pose fight their joints from the first step.

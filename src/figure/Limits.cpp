@@ -8,8 +8,7 @@
 
 namespace afb::figure {
 
-double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation,
-                    const Eigen::Matrix3d& body2Rotation) {
+double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation, const Eigen::Matrix3d& body2Rotation) {
     const Eigen::Vector3d shaft = body1Rotation * cone.shaftInBody1;
     const Eigen::Vector3d axis = body2Rotation * cone.axisInBody2;
     return std::acos(std::clamp(shaft.dot(axis), -1.0, 1.0));
@@ -18,8 +17,7 @@ double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation,
 Eigen::Vector2d pyramidPlanarAnglesRad(const PyramidLimit& pyramid, const Eigen::Matrix3d& body1Rotation,
                                        const Eigen::Matrix3d& body2Rotation) {
     const Eigen::Vector3d shaft = body1Rotation * pyramid.shaftInBody1;
-    const Eigen::Vector3d inBasis =
-        (body2Rotation * pyramid.basisInBody2).transpose() * shaft; // (s·f, s·l, s·u)
+    const Eigen::Vector3d inBasis = (body2Rotation * pyramid.basisInBody2).transpose() * shaft; // (s·f, s·l, s·u)
     return {std::atan2(inBasis.y(), inBasis.x()), std::atan2(inBasis.z(), inBasis.x())};
 }
 
@@ -46,8 +44,7 @@ double limitExcessRad(const FigureConstraint& c, const Eigen::Matrix3d& body1Rot
         return std::max(0.0, coneAngleRad(*cone, body1Rotation, body2Rotation) - cone->halfAngleRad);
     if (const auto* pyramid = std::get_if<PyramidLimit>(&c.limit)) {
         const Eigen::Vector2d a = pyramidPlanarAnglesRad(*pyramid, body1Rotation, body2Rotation);
-        return std::max(
-            {0.0, std::abs(a.x()) - pyramid->halfAngle1Rad, std::abs(a.y()) - pyramid->halfAngle2Rad});
+        return std::max({0.0, std::abs(a.x()) - pyramid->halfAngle1Rad, std::abs(a.y()) - pyramid->halfAngle2Rad});
     }
     return 0.0;
 }

@@ -57,8 +57,7 @@ MassProperties computeMassProperties(const Polytope& polytope, double density) {
     const Eigen::Vector3d r = v.front();
     Moments m;
     for (const auto& face : polytope.faces)
-        for (std::size_t t = 1; t + 1 < face.size(); ++t)
-            addTetrahedron(m, v, r, {face[0], face[t], face[t + 1]});
+        for (std::size_t t = 1; t + 1 < face.size(); ++t) addTetrahedron(m, v, r, {face[0], face[t], face[t + 1]});
 
     result.volume = m.volume6 / 6.0;
     if (result.volume == 0.0) {
@@ -71,8 +70,7 @@ MassProperties computeMassProperties(const Polytope& polytope, double density) {
     const Eigen::Vector3d comFromRef = m.first24 / (24.0 * result.volume);
     result.centerOfMass = r + comFromRef;
     // Parallel-axis shift of the second moment from r to the centre of mass: C_com = C_r − V·g·gᵀ.
-    const Eigen::Matrix3d secondAtCom =
-        m.second120 / 120.0 - result.volume * (comFromRef * comFromRef.transpose());
+    const Eigen::Matrix3d secondAtCom = m.second120 / 120.0 - result.volume * (comFromRef * comFromRef.transpose());
     // I = ρ (tr(C)·1 − C): diagonal ∫(y² + z²), off-diagonal −∫xy.
     result.inertia = density * (secondAtCom.trace() * Eigen::Matrix3d::Identity() - secondAtCom);
     return result;

@@ -24,7 +24,8 @@ std::vector<Transform> bodiesFromJoints(const Figure& figure, const Transform& e
     return out;
 }
 
-std::vector<BodyState> inheritVelocities(std::span<const Transform> before, std::span<const Transform> after, double dt) {
+std::vector<BodyState> inheritVelocities(std::span<const Transform> before, std::span<const Transform> after,
+                                         double dt) {
     std::vector<BodyState> out(after.size());
     for (std::size_t i = 0; i < after.size(); ++i) {
         out[i].pose = after[i];

@@ -49,14 +49,11 @@ constexpr std::array<std::array<int, 5>, 12> kDodFaces = {{
     {6, 14, 15, 7, 11},
 }};
 
-Eigen::Vector3d boundsCentre(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
-    return (min + max) * 0.5;
-}
+Eigen::Vector3d boundsCentre(const Eigen::Vector3d& min, const Eigen::Vector3d& max) { return (min + max) * 0.5; }
 
 // Ring vertex i of n on the ellipse with half-axes (hx, hy) around `centre` at height z; θi = 2πi/n, as the
 // engine computes it, so vertex 0 lies on +X.
-Eigen::Vector3d ringVertex(const Eigen::Vector3d& centre, const Eigen::Vector3d& half, int i, int n,
-                           double z) {
+Eigen::Vector3d ringVertex(const Eigen::Vector3d& centre, const Eigen::Vector3d& half, int i, int n, double z) {
     const double angle = 2.0 * std::numbers::pi * i / n;
     return {std::cos(angle) * half.x() + centre.x(), std::sin(angle) * half.y() + centre.y(), z};
 }
@@ -80,8 +77,7 @@ int Polytope::edgeCount() const {
     return static_cast<int>(uses / 2);
 }
 
-std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices,
-                                          std::span<const int> face) {
+std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices, std::span<const int> face) {
     if (face.size() < 3) return std::nullopt;
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     for (std::size_t k = 0; k < face.size(); ++k) {
@@ -93,8 +89,7 @@ std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> verti
     return n.normalized();
 }
 
-std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices,
-                                  std::span<const std::vector<int>> faces) {
+std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices, std::span<const std::vector<int>> faces) {
     std::vector<FacePlane> planes;
     for (const std::vector<int>& face : faces) {
         const std::optional<Eigen::Vector3d> n = faceNormal(vertices, face);
@@ -138,8 +133,7 @@ Polytope makeBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
         const bool xMax = ((i ^ (i >> 1)) & 1) != 0;
         const bool yMax = ((i >> 1) & 1) != 0;
         const bool zMax = ((i >> 2) & 1) != 0;
-        box.vertices.emplace_back(xMax ? max.x() : min.x(), yMax ? max.y() : min.y(),
-                                  zMax ? max.z() : min.z());
+        box.vertices.emplace_back(xMax ? max.x() : min.x(), yMax ? max.y() : min.y(), zMax ? max.z() : min.z());
     }
     box.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
     return box;

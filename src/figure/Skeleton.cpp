@@ -1,12 +1,13 @@
 #include "afb/figure/Skeleton.h"
 
-#include "afb/text/Lexer.h"
-
-#include <Eigen/Geometry>
 #include <cmath>
 #include <cstddef>
 #include <numbers>
 #include <utility>
+
+#include <Eigen/Geometry>
+
+#include "afb/text/Lexer.h"
 
 namespace afb::figure {
 namespace {
@@ -19,9 +20,7 @@ struct JointQuat {
     Eigen::Vector3d position = Eigen::Vector3d::Zero();
 };
 
-Eigen::Vector3d toEigen(const decl::Vec3& v) {
-    return {v.x, v.y, v.z};
-}
+Eigen::Vector3d toEigen(const decl::Vec3& v) { return {v.x, v.y, v.z}; }
 
 // The standard quaternion for md5 components (x, y, z) as written: w = +sqrt(|1 − x² − y² − z²|)
 // (idQuat::CalcW), then conjugated. Normalised, as rotationFromMd5 does, so an out-of-range input still
@@ -88,9 +87,7 @@ std::vector<JointQuat> blend(std::vector<JointQuat> from, const std::vector<Join
     return from;
 }
 
-bool isFinite(const Transform& t) {
-    return t.rotation.allFinite() && t.position.allFinite();
-}
+bool isFinite(const Transform& t) { return t.rotation.allFinite() && t.position.allFinite(); }
 
 // Angle of the rotation a⁻¹·b, radians.
 double angleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
@@ -98,9 +95,7 @@ double angleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     return std::acos(c > 1.0 ? 1.0 : (c < -1.0 ? -1.0 : c));
 }
 
-std::string quotedName(const std::string& s) {
-    return "\"" + s + "\"";
-}
+std::string quotedName(const std::string& s) { return "\"" + s + "\""; }
 
 // Hand-built values can break what the parsers guarantee; the poses rely on it, so build() checks it again.
 std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::Md5Anim& anim) {
@@ -108,11 +103,10 @@ std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::
     for (std::size_t i = 0; i < mesh.joints.size(); ++i) {
         const int p = mesh.joints[i].parent;
         if (p < -1 || p >= static_cast<int>(i))
-            return "mesh joint " + std::to_string(i) + " " + quotedName(mesh.joints[i].name) +
-                   " has parent " + std::to_string(p) + ": parents must precede children";
+            return "mesh joint " + std::to_string(i) + " " + quotedName(mesh.joints[i].name) + " has parent " +
+                   std::to_string(p) + ": parents must precede children";
     }
-    if (mesh.joints[0].parent != -1)
-        return "mesh joint 0 " + quotedName(mesh.joints[0].name) + " is not a root";
+    if (mesh.joints[0].parent != -1) return "mesh joint 0 " + quotedName(mesh.joints[0].name) + " is not a root";
     if (auto m = decl::hierarchyMismatch(anim, mesh))
         return "af_pose does not match the mesh hierarchy (af-format §7.4): " + *m;
     if (anim.frames.empty()) return "af_pose has no frames";
@@ -170,10 +164,8 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
     // af-format §2.1: idAF::Load builds the frame at 1 ms, then the root translation is replaced by (actors)
     // or offset by (AF entities) the visual offset before the hierarchy is concatenated.
     std::vector<Transform> loadLocal = animPoseLocal(afPose, 0.001);
-    if (rootTranslation == RootTranslation::ReplacedByOffset)
-        loadLocal[0].position = modelOffset;
-    else
-        loadLocal[0].position += modelOffset;
+    if (rootTranslation == RootTranslation::ReplacedByOffset) loadLocal[0].position = modelOffset;
+    else loadLocal[0].position += modelOffset;
     s.m_loadPose = toModelSpace(loadLocal, s.m_parents);
 
     // af-format §5.1 step 3: FinishAFPose starts from GetSingleFrame(0), the baseframe (root translation
@@ -204,23 +196,21 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
         }
     }
     if (worstUnits > kPoseMismatchUnits || worstRad > kPoseMismatchRad)
-        diagnostics.warning(
-            where, "the af_pose load pose (frame 0 at 1 ms) differs from the af_pose baseframe that "
-                   "drives the skeleton at run time (af-format §5.1, §8 item 19): joint " +
-                       std::to_string(worstJoint) + " " + quotedName(s.m_names[worstJoint]) + " is " +
-                       std::to_string(worstUnits) + " units and " +
-                       std::to_string(worstRad * 180.0 / std::numbers::pi) +
-                       " degrees apart; keep af_pose single-frame with frame 0 equal to the baseframe");
+        diagnostics.warning(where, "the af_pose load pose (frame 0 at 1 ms) differs from the af_pose baseframe that "
+                                   "drives the skeleton at run time (af-format §5.1, §8 item 19): joint " +
+                                       std::to_string(worstJoint) + " " + quotedName(s.m_names[worstJoint]) + " is " +
+                                       std::to_string(worstUnits) + " units and " +
+                                       std::to_string(worstRad * 180.0 / std::numbers::pi) +
+                                       " degrees apart; keep af_pose single-frame with frame 0 equal to the baseframe");
 
     // af-format §8 item 22: lookups find the first of two names equal ignoring case.
     for (std::size_t i = 1; i < n; ++i)
         for (std::size_t k = 0; k < i; ++k)
             if (text::equalsIgnoreCase(s.m_names[i], s.m_names[k])) {
                 diagnostics.warning(where, "joint " + std::to_string(i) + " " + quotedName(s.m_names[i]) +
-                                               " has the same name, ignoring case, as joint " +
-                                               std::to_string(k) + " " + quotedName(s.m_names[k]) +
-                                               ": lookups by name find joint " + std::to_string(k) +
-                                               " (af-format §8 item 22)");
+                                               " has the same name, ignoring case, as joint " + std::to_string(k) +
+                                               " " + quotedName(s.m_names[k]) + ": lookups by name find joint " +
+                                               std::to_string(k) + " (af-format §8 item 22)");
                 break;
             }
     return s;
@@ -274,10 +264,8 @@ std::vector<Transform> toModelSpace(const std::vector<Transform>& local, const s
     model.reserve(local.size());
     for (std::size_t i = 0; i < local.size(); ++i) {
         const int p = i < parents.size() ? parents[i] : -1;
-        if (p < 0 || p >= static_cast<int>(i))
-            model.push_back(local[i]);
-        else
-            model.push_back(model[static_cast<std::size_t>(p)] * local[i]);
+        if (p < 0 || p >= static_cast<int>(i)) model.push_back(local[i]);
+        else model.push_back(model[static_cast<std::size_t>(p)] * local[i]);
     }
     return model;
 }

@@ -1,14 +1,14 @@
 // Drop runs (src/sim): the scene, the per-step measurements and their aggregation over worlds and threads.
 #include "afb/sim/Drop.h"
 
-#include <LinearMath/btScalar.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <random>
 #include <thread>
+
+#include <LinearMath/btScalar.h>
 
 #include "afb/bullet/Convert.h"
 #include "afb/pose/SkeletonDriver.h"
@@ -37,7 +37,7 @@ struct Partial {
     DropResult r;
     double stepSeconds = 0;
     double worstAnchor = -1, worstLimit = -1; // for the names of the worst joints
-    std::vector<double> restTimes; // per instance, −1 if never
+    std::vector<double> restTimes;            // per instance, −1 if never
     std::vector<figure::Transform> firstBodies;
 };
 
@@ -173,7 +173,9 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
             tiltDir = unit(rng) * 2 * kPi;
         }
         btQuaternion q(btVector3(0, 0, 1), btScalar(yaw));
-        if (tilt > 0) q = btQuaternion(btVector3(btScalar(std::cos(tiltDir)), btScalar(std::sin(tiltDir)), 0), btScalar(tilt)) * q;
+        if (tilt > 0)
+            q = btQuaternion(btVector3(btScalar(std::cos(tiltDir)), btScalar(std::sin(tiltDir)), 0), btScalar(tilt)) *
+                q;
         const btMatrix3x3 rot(q);
         figureBounds(figure, rot, lo, hi);
         const double x = (i % columns) * spacing, y = (i / columns) * spacing;
@@ -186,7 +188,10 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     {
         std::vector<std::thread> threads;
         for (int w = 1; w < worlds; ++w)
-            threads.emplace_back([&, w] { parts[static_cast<std::size_t>(w)] = runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps); });
+            threads.emplace_back([&, w] {
+                parts[static_cast<std::size_t>(w)] =
+                    runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps);
+            });
         parts[0] = runWorld(asset, o, perWorld[0], true, steps);
         for (std::thread& t : threads) t.join();
     }
@@ -239,13 +244,14 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
     r.firstSpawn = bullet::toEigen(perWorld[0][0]);
     const pose::SkeletonPose pose = pose::driveSkeleton(figure, r.firstBodies);
     const Eigen::Quaterniond qe(pose.entity.rotation);
-    const double entity[7] = {pose.entity.position.x(), pose.entity.position.y(), pose.entity.position.z(),
-                              qe.w(), qe.x(), qe.y(), qe.z()};
+    const double entity[7] = {
+        pose.entity.position.x(), pose.entity.position.y(), pose.entity.position.z(), qe.w(), qe.x(), qe.y(), qe.z()};
     std::copy(entity, entity + 7, r.entity);
     for (int j = 0; j < figure.skeleton.jointCount(); ++j) {
         const figure::Transform& t = pose.model[static_cast<std::size_t>(j)];
         const Eigen::Quaterniond q(t.rotation);
-        r.finalPose.push_back({figure.skeleton.name(j), {t.position.x(), t.position.y(), t.position.z()}, {q.w(), q.x(), q.y(), q.z()}});
+        r.finalPose.push_back(
+            {figure.skeleton.name(j), {t.position.x(), t.position.y(), t.position.z()}, {q.w(), q.x(), q.y(), q.z()}});
     }
     return r;
 }

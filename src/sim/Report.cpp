@@ -28,7 +28,8 @@ const std::vector<Field>& fields() {
         {"steps", "frames stepped", [](const DropResult& r) { return json(r.steps); }},
         {"wall_ms", "wall time of the whole run", [](const DropResult& r) { return json(r.wallMs); }},
         {"us_per_step", "stepping only, the slowest world", [](const DropResult& r) { return json(r.usPerStep); }},
-        {"us_per_body_step", "us_per_step × worlds / bodies", [](const DropResult& r) { return json(r.usPerBodyStep); }},
+        {"us_per_body_step", "us_per_step × worlds / bodies",
+         [](const DropResult& r) { return json(r.usPerBodyStep); }},
         {"awake_body_steps", "body-steps not asleep", [](const DropResult& r) { return json(r.awakeBodySteps); }},
         {"max_anchor_error_m", "largest separation of a constraint's two anchor copies (sliders: off-axis only)",
          [](const DropResult& r) { return json(r.maxAnchorErrorM); }},
@@ -43,9 +44,11 @@ const std::vector<Field>& fields() {
         {"worst_contact", "the pair where it happened", [](const DropResult& r) { return json(r.worstContact); }},
         {"rest_penetration_m", "deepest contact over the last simulated second",
          [](const DropResult& r) { return json(r.restPenetrationM); }},
-        {"max_energy_gain_j", "kinetic + potential above the start", [](const DropResult& r) { return json(r.maxEnergyGainJ); }},
+        {"max_energy_gain_j", "kinetic + potential above the start",
+         [](const DropResult& r) { return json(r.maxEnergyGainJ); }},
         {"max_speed_mps", "fastest body", [](const DropResult& r) { return json(r.maxSpeedMps); }},
-        {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m", [](const DropResult& r) { return json(r.exploded); }},
+        {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
+         [](const DropResult& r) { return json(r.exploded); }},
         {"exploded_at_s", "when it first exploded", [](const DropResult& r) { return optional(r.explodedAtS); }},
         {"settle_time_s", "every instance at rest by its figure's rules, else null",
          [](const DropResult& r) { return optional(r.settleTimeS); }},
@@ -108,12 +111,9 @@ std::string methodFromJson(const json& j, bullet::Method& out) {
 }
 
 json dropOptionsJson(const DropOptions& o) {
-    return {{"height_m", o.heightM},
-            {"count", o.count},
-            {"seconds", o.seconds},
-            {"hz", o.hz},
-            {"sleeping", o.sleeping},
-            {"seed", o.seed ? json(*o.seed) : json(nullptr)},
+    return {{"height_m", o.heightM},         {"count", o.count},
+            {"seconds", o.seconds},          {"hz", o.hz},
+            {"sleeping", o.sleeping},        {"seed", o.seed ? json(*o.seed) : json(nullptr)},
             {"method", methodJson(o.method)}};
 }
 
@@ -151,8 +151,9 @@ json dropResultJson(const DropResult& r) {
     json j = json::object();
     for (const Field& f : fields()) j[std::string(f.name)] = f.value(r);
     j["method"] = methodJson(r.method);
-    j["final_pose"] = {{"entity", {{"position", {r.entity[0], r.entity[1], r.entity[2]}},
-                                   {"quaternion", {r.entity[3], r.entity[4], r.entity[5], r.entity[6]}}}},
+    j["final_pose"] = {{"entity",
+                        {{"position", {r.entity[0], r.entity[1], r.entity[2]}},
+                         {"quaternion", {r.entity[3], r.entity[4], r.entity[5], r.entity[6]}}}},
                        {"joints", poseJson(r.finalPose)}};
     return j;
 }

@@ -316,7 +316,8 @@ bool Lexer::acceptPunct(char c) {
 
 std::string Lexer::expectString(std::string_view what) {
     const Token t = next();
-    if (t.kind != TokenKind::String) fail(t, "expected " + std::string(what) + " as a \"quoted string\", found " + t.describe());
+    if (t.kind != TokenKind::String)
+        fail(t, "expected " + std::string(what) + " as a \"quoted string\", found " + t.describe());
     return std::string(t.text);
 }
 
@@ -364,7 +365,8 @@ std::uint64_t Lexer::parseCount(std::string_view what, std::uint64_t max) {
     if (t.kind != TokenKind::Number || !t.isInteger)
         fail(t, "expected a non-negative integer for " + std::string(what) + ", found " + t.describe());
     if (t.integer > max)
-        fail(t, std::string(what) + " " + std::string(t.text) + " is out of range (at most " + std::to_string(max) + ")");
+        fail(t,
+             std::string(what) + " " + std::string(t.text) + " is out of range (at most " + std::to_string(max) + ")");
     return t.integer;
 }
 

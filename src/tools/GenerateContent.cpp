@@ -18,13 +18,13 @@
 // tests/cli/content.cmake checks that a fresh run reproduces the committed files byte for byte.
 //
 // Licence: the generated content is MIT licensed, like the code of this project.
-#include "content/Common.h"
-
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
+
+#include "content/Common.h"
 
 namespace afb::gen {
 

@@ -3,8 +3,6 @@
 //   BM_LexLargestMd5Mesh    the lexer alone on the same file (bytes/s, tokens/s)
 //   BM_ParseAllAf           parseAf on every .af file (bytes/s, decls/s)
 // Each benchmark is skipped with an error when its inputs are absent.
-#include <benchmark/benchmark.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
@@ -16,6 +14,8 @@
 #include <system_error>
 #include <utility>
 #include <vector>
+
+#include <benchmark/benchmark.h>
 
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Mesh.h"

@@ -44,15 +44,19 @@ struct Scene {
 };
 
 // Skeleton: origin, top, arm (identity orientations). The arm is a 20-unit box along +X from the anchor.
-const std::vector<afb::test::TestJoint> kJoints = {
-    {"origin", -1, 0, 0, 0}, {"top", 0, 0, 0, 104}, {"arm", 1, 0, 0, 100}};
+const std::vector<afb::test::TestJoint> kJoints = {{"origin", -1, 0, 0, 0},
+                                                   {"top", 0, 0, 0, 104},
+                                                   {"arm", 1, 0, 0, 100}};
 
-std::string figureWith(const std::string& constraint, const std::string& topMount = "fixed \"mount\" { body1 \"top\" body2 \"world\" }") {
+std::string figureWith(const std::string& constraint,
+                       const std::string& topMount = "fixed \"mount\" { body1 \"top\" body2 \"world\" }") {
     return "articulatedFigure t {\n"
            " settings { selfCollision 0 }\n"
-           " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
+           " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 "
+           "}\n"
            " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 }\n"
-           " " + topMount + "\n " + constraint + "\n}\n";
+           " " +
+           topMount + "\n " + constraint + "\n}\n";
 }
 
 afb::figure::Figure build(const std::string& text) {
@@ -75,12 +79,16 @@ TEST_CASE("hinge: the limit range is the spec's, centred and off-centre", "[bull
         double expectDeg; // φ at rest against the limit
     };
     // af-format §4.5: φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2]; rotation about +Y by +φ turns the arm's +X down.
-    const Case cases[] = {{"0, 90, 0", -9.81, 45}, {"0, 90, 0", 9.81, -45}, {"30, 90, 0", -9.81, 15},
-                          {"30, 90, 0", 9.81, -75}, {"0, 60, 20", -9.81, 50}};
+    const Case cases[] = {{"0, 90, 0", -9.81, 45},
+                          {"0, 90, 0", 9.81, -45},
+                          {"30, 90, 0", -9.81, 15},
+                          {"30, 90, 0", 9.81, -75},
+                          {"0, 60, 20", -9.81, 50}};
     for (const Case& c : cases) {
         DYNAMIC_SECTION("limit " << c.limit << " gravity z " << c.gravityZ) {
             Scene scene(build(figureWith(std::string("hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
-                                                     "axis ( 0, 1, 0 ) friction 0 limit ") + c.limit + " }")),
+                                                     "axis ( 0, 1, 0 ) friction 0 limit ") +
+                                         c.limit + " }")),
                         btVector3(0, 0, btScalar(c.gravityZ)));
             scene.run(2.0);
             const btMatrix3x3 r = scene.relative();
@@ -160,8 +168,7 @@ TEST_CASE("ballAndSocketJoint pyramid limit: a true pyramid, corners included", 
     }
 }
 
-TEST_CASE("direction limit rows: their excess is figure::limitExcessRad's, cone and pyramid",
-          "[bullet][constraints]") {
+TEST_CASE("direction limit rows: their excess is figure::limitExcessRad's, cone and pyramid", "[bullet][constraints]") {
     // The solver's rows compute the excess in btScalar for their Jacobians; the figure's one definition must
     // agree.
     using afb::bullet::DirectionLimitConstraint;
@@ -184,14 +191,12 @@ TEST_CASE("direction limit rows: their excess is figure::limitExcessRad's, cone 
     const double tolerance = sizeof(btScalar) == sizeof(double) ? 1e-9 : 1e-4;
     int exceeded = 0;
     for (int i = 0; i < 24; ++i) {
-        const Matrix3d ra =
-            AngleAxisd(0.37 * i, Vector3d(std::sin(i), 1, std::cos(2.0 * i)).normalized()).matrix();
+        const Matrix3d ra = AngleAxisd(0.37 * i, Vector3d(std::sin(i), 1, std::cos(2.0 * i)).normalized()).matrix();
         const Matrix3d rb = AngleAxisd(-0.21 * i, Vector3d(1, std::cos(i), 0.5).normalized()).matrix();
         a.setCenterOfMassTransform(btTransform(afb::bullet::toBt(ra)));
         b.setCenterOfMassTransform(btTransform(afb::bullet::toBt(rb)));
         INFO("pose " << i);
-        CHECK(double(coneRows.violation()) ==
-              Approx(afb::figure::limitExcessRad(cone, ra, rb)).margin(tolerance));
+        CHECK(double(coneRows.violation()) == Approx(afb::figure::limitExcessRad(cone, ra, rb)).margin(tolerance));
         CHECK(double(pyramidRows.violation()) ==
               Approx(afb::figure::limitExcessRad(pyramid, ra, rb)).margin(tolerance));
         if (afb::figure::limitExcessRad(pyramid, ra, rb) > 0) ++exceeded;
@@ -209,8 +214,9 @@ TEST_CASE("universalJoint: cone limit on shaft 1, no relative spin, spin is tran
         CHECK(deg == Approx(30).margin(1.0));
     }
     SECTION("pyramid limit on shaft 1") {
-        Scene scene(build(figureWith("universalJoint \"u\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
-                                     "shafts ( 1, 0, 0 ), ( -1, 0, 0 ) friction 0 pyramidLimit ( 1, 0, 0 ), 60, 40, 0 }")),
+        Scene scene(build(figureWith(
+                        "universalJoint \"u\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
+                        "shafts ( 1, 0, 0 ), ( -1, 0, 0 ) friction 0 pyramidLimit ( 1, 0, 0 ), 60, 40, 0 }")),
                     btVector3(0, 0, -9.81f));
         scene.run(2.0);
         const btVector3 shaft = scene.relative().getColumn(0);
@@ -218,7 +224,8 @@ TEST_CASE("universalJoint: cone limit on shaft 1, no relative spin, spin is tran
     }
     SECTION("spin about the shafts is transmitted; swing is free") {
         // The top may only spin about X (a hinge to the world); the arm is driven about X.
-        const std::string mount = "hinge \"mount\" { body1 \"top\" body2 \"world\" anchor ( 0, 0, 104 ) axis ( 1, 0, 0 ) friction 0 }";
+        const std::string mount =
+            "hinge \"mount\" { body1 \"top\" body2 \"world\" anchor ( 0, 0, 104 ) axis ( 1, 0, 0 ) friction 0 }";
         Scene scene(build(figureWith("universalJoint \"u\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
                                      "shafts ( 1, 0, 0 ), ( -1, 0, 0 ) friction 0 }",
                                      mount)),
@@ -245,8 +252,8 @@ TEST_CASE("slider: translation along the axis only", "[bullet][constraints]") {
     const btVector3 start = scene.position(1);
     scene.run(1.0);
     const btVector3 moved = scene.position(1) - start;
-    CHECK(moved.x() > 0.5);                     // slid ~1 m along +X under 2 m/s²
-    CHECK(std::abs(moved.z()) < 0.005);         // did not drop
+    CHECK(moved.x() > 0.5);             // slid ~1 m along +X under 2 m/s²
+    CHECK(std::abs(moved.z()) < 0.005); // did not drop
     CHECK(std::abs(moved.y()) < 0.005);
     CHECK(angleBetween(scene.rotation(1).getColumn(0), btVector3(1, 0, 0)) < 1 * kDeg);
 }
@@ -263,20 +270,23 @@ TEST_CASE("spring: quadratic force settles where k·ΔL² = m·g; maxLength hold
     // The arm hangs from the top by a spring at its centre of mass (10, 0, 100) to (10, 0, 110): rest 10 units.
     auto springFigure = [](const std::string& extra) {
         return "articulatedFigure t {\n settings { selfCollision 0 }\n"
-               " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
-               " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 "
+               " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density "
+               "0.1 }\n"
+               " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density "
+               "0.2 "
                "friction 0.1, 0.1, 0.5 }\n"
                " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n"
                " slider \"guide\" { body1 \"arm\" body2 \"world\" axis ( 0, 0, 1 ) }\n"
                " spring \"s\" { body1 \"arm\" body2 \"top\" anchor1 ( 10, 0, 100 ) anchor2 ( 10, 0, 110 ) "
-               "stretch 120 compress 120 damping 0 restLength 10 " + extra + " }\n}\n";
+               "stretch 120 compress 120 damping 0 restLength 10 " +
+               extra + " }\n}\n";
     };
     SECTION("equilibrium") {
         const afb::figure::Figure f = build(springFigure(""));
         Scene scene(f, btVector3(0, 0, -9.81f));
         scene.run(5.0);
-        const double mass = f.bodies[1].massKg;                 // 80 in³ × 0.2 = 16
-        const double k = 120.0 / kUnit;                         // N/m² (F = k ΔL², §4.7)
+        const double mass = f.bodies[1].massKg; // 80 in³ × 0.2 = 16
+        const double k = 120.0 / kUnit;         // N/m² (F = k ΔL², §4.7)
         const double expected = 10 * kUnit + std::sqrt(mass * 9.81 / k);
         const double length = (btVector3(btScalar(10 * kUnit), 0, btScalar(110 * kUnit)) - scene.position(1)).length();
         CHECK(mass == Approx(16.0));

@@ -23,17 +23,19 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr double kUnit = 0.0254;
 
 // Skeleton: origin, top, arm (identity orientations). The arm is a 20-unit box along +X from the anchor.
-const std::vector<afb::test::TestJoint> kJoints = {
-    {"origin", -1, 0, 0, 0}, {"top", 0, 0, 0, 104}, {"arm", 1, 0, 0, 100}};
+const std::vector<afb::test::TestJoint> kJoints = {{"origin", -1, 0, 0, 0},
+                                                   {"top", 0, 0, 0, 104},
+                                                   {"arm", 1, 0, 0, 100}};
 
 afb::figure::Figure armFigure(const std::string& constraint) {
-    const std::string text = "articulatedFigure t {\n settings { selfCollision 0 }\n"
-                             " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, "
-                             "104 ) density 0.1 }\n"
-                             " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) "
-                             "density 0.2 }\n"
-                             " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
-                             constraint + "\n}\n";
+    const std::string text =
+        "articulatedFigure t {\n settings { selfCollision 0 }\n"
+        " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, "
+        "104 ) density 0.1 }\n"
+        " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) "
+        "density 0.2 }\n"
+        " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
+        constraint + "\n}\n";
     const auto built = afb::test::buildTestFigure(text, kJoints);
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
@@ -161,10 +163,10 @@ TEST_CASE("multipoint and speculative contacts: a falling box stops at the groun
     // corner, tips and sinks by most of a step's travel. Multipoint contacts fill the face at first touch;
     // speculative contacts find it from a step away, so the box stops at the surface.
     const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure(
-        "articulatedFigure box {\n body \"box\" { joint \"origin\" model box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-        "0, 4 ) density 0.02 }\n}\n",
-        joints);
+    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
+                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
+                                                  "0, 4 ) density 0.02 }\n}\n",
+                                                  joints);
     REQUIRE(built.figure);
     auto peakDepth = [&](const Method& method) {
         afb::sim::Scene scene(method);

@@ -1,5 +1,19 @@
 // Spawning figures into Bullet (float build): RagdollAsset shapes and margins, Ragdoll placement, a figure at rest
 // staying at rest without gravity, shared shapes and clean removal (af-format §2.5, §3.1, §4.1, §4.5, §6.2).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
 #include "FigureFixture.h"
 #include "TestSupport.h"
 #include "afb/bullet/Convert.h"
@@ -9,18 +23,6 @@
 #include "afb/figure/Collision.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Scene.h"
-
-#include <Eigen/Geometry>
-#include <algorithm>
-#include <catch2/catch.hpp>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <memory>
-#include <numbers>
-#include <random>
-#include <string>
-#include <vector>
 
 using namespace afb;
 using bullet::Ragdoll;
@@ -170,8 +172,8 @@ void checkHingesPushedIn(const std::string& name, const Figure& figure) {
         auto* hinge = dynamic_cast<btHingeConstraint*>(scene.ragdoll->constraint(i));
         REQUIRE(hinge);
         const double angle = static_cast<double>(hinge->getHingeAngle());
-        INFO(name << " hinge " << c.name << ": angle " << angle << " rad, range [" << r->lowerRad << ", "
-                  << r->upperRad << "]");
+        INFO(name << " hinge " << c.name << ": angle " << angle << " rad, range [" << r->lowerRad << ", " << r->upperRad
+                  << "]");
         const double slack = std::numbers::pi / 180;
         CHECK(angle >= r->lowerRad - slack);
         CHECK(angle <= r->upperRad + slack);
@@ -266,11 +268,14 @@ void checkMargins(const std::string& name, const Figure& figure) {
 
 // Two boxes joined by a hinge about model +Y through (0, 0, 50), limited by `limit a0, a1, a2`.
 Figure hingeFigure(const std::string& limit) {
-    const std::vector<test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"Hips", 0, 0, 0, 40}, {"Spine", 1, 0, 0, 60}};
+    const std::vector<test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                 {"Hips", 0, 0, 0, 40},
+                                                 {"Spine", 1, 0, 0, 60}};
     const test::BuiltFigure b = test::buildTestFigure(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model box( ( -4, -4, -8 ), ( 4, 4, 8 ) ) origin ( 0, 0, 40 ) angles ( 0, 0, 20 ) }
 	body "chest" { joint "Spine" model box( ( -4, -4, -8 ), ( 4, 4, 8 ) ) origin ( 0, 0, 60 ) angles ( 10, 0, 0 ) }
-	hinge "h" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) )" + limit + R"( }
+	hinge "h" { body1 "chest" body2 "pelvis" anchor ( 0, 0, 50 ) axis ( 0, 1, 0 ) )" +
+                                                          limit + R"( }
 }
 )",
                                                       joints);

@@ -8,18 +8,19 @@
 //   per channel
 // Exit code 0 when the check holds; otherwise 1 with the reason on stderr.
 #include <algorithm>
-#include <cairo.h>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <expat.h>
 #include <fstream>
 #include <iterator>
 #include <memory>
 #include <set>
 #include <string>
 #include <vector>
+
+#include <cairo.h>
+#include <expat.h>
 
 namespace {
 
@@ -36,8 +37,7 @@ std::vector<unsigned char> readFile(const char* path) {
 }
 
 std::uint32_t bigEndian32(const std::vector<unsigned char>& b, std::size_t at) {
-    return std::uint32_t(b[at]) << 24 | std::uint32_t(b[at + 1]) << 16 | std::uint32_t(b[at + 2]) << 8 |
-           b[at + 3];
+    return std::uint32_t(b[at]) << 24 | std::uint32_t(b[at + 1]) << 16 | std::uint32_t(b[at + 2]) << 8 | b[at + 3];
 }
 
 SurfacePtr decode(const char* path) {
@@ -60,16 +60,14 @@ int checkPng(const char* path) {
     static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (bytes.size() < 33 || !std::equal(kSignature, kSignature + 8, bytes.begin()))
         return fail(std::string(path) + ": no PNG signature");
-    if (std::string(bytes.begin() + 12, bytes.begin() + 16) != "IHDR")
-        return fail("the first chunk is not IHDR");
+    if (std::string(bytes.begin() + 12, bytes.begin() + 16) != "IHDR") return fail("the first chunk is not IHDR");
     const std::uint32_t width = bigEndian32(bytes, 16), height = bigEndian32(bytes, 20);
     if (width < 100 || height < 100 || width > 10000 || height > 10000)
         return fail("implausible size " + std::to_string(width) + " x " + std::to_string(height));
     const SurfacePtr image = decode(path);
     if (!image) return fail(std::string(path) + ": cairo cannot decode it");
     const int w = cairo_image_surface_get_width(image.get()), h = cairo_image_surface_get_height(image.get());
-    if (std::uint32_t(w) != width || std::uint32_t(h) != height)
-        return fail("IHDR size differs from the pixels");
+    if (std::uint32_t(w) != width || std::uint32_t(h) != height) return fail("IHDR size differs from the pixels");
     std::set<std::uint32_t> colours;
     long inked = 0, total = 0;
     for (int y = h / 3; y < 2 * h / 3; ++y)
@@ -79,8 +77,8 @@ int checkPng(const char* path) {
             inked += p != 0xFFFFFFu;
             ++total;
         }
-    std::printf("%s: PNG %u x %u, %zu colours and %.1f%% non-white pixels in the middle third\n", path, width,
-                height, colours.size(), 100.0 * double(inked) / double(total));
+    std::printf("%s: PNG %u x %u, %zu colours and %.1f%% non-white pixels in the middle third\n", path, width, height,
+                colours.size(), 100.0 * double(inked) / double(total));
     if (colours.size() < 2) return fail("blank: one colour in the middle of the picture");
     return 0;
 }
@@ -94,22 +92,20 @@ struct SvgState {
 int checkSvg(const char* path) {
     const std::vector<unsigned char> bytes = readFile(path);
     if (bytes.empty()) return fail(std::string(path) + ": empty or missing");
-    std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate(nullptr),
-                                                                        XML_ParserFree);
+    std::unique_ptr<XML_ParserStruct, decltype(&XML_ParserFree)> parser(XML_ParserCreate(nullptr), XML_ParserFree);
     SvgState state;
     XML_SetUserData(parser.get(), &state);
-    XML_SetStartElementHandler(
-        parser.get(), [](void* data, const XML_Char* name, const XML_Char** attributes) {
-            auto& s = *static_cast<SvgState*>(data);
-            if (s.elements++ > 0) return;
-            s.root = name;
-            int sizes = 0;
-            for (int i = 0; attributes[i]; i += 2)
-                sizes += std::string(attributes[i]) == "width" || std::string(attributes[i]) == "height";
-            s.rootHasSize = sizes == 2;
-        });
-    if (XML_Parse(parser.get(), reinterpret_cast<const char*>(bytes.data()), static_cast<int>(bytes.size()),
-                  1) != XML_STATUS_OK)
+    XML_SetStartElementHandler(parser.get(), [](void* data, const XML_Char* name, const XML_Char** attributes) {
+        auto& s = *static_cast<SvgState*>(data);
+        if (s.elements++ > 0) return;
+        s.root = name;
+        int sizes = 0;
+        for (int i = 0; attributes[i]; i += 2)
+            sizes += std::string(attributes[i]) == "width" || std::string(attributes[i]) == "height";
+        s.rootHasSize = sizes == 2;
+    });
+    if (XML_Parse(parser.get(), reinterpret_cast<const char*>(bytes.data()), static_cast<int>(bytes.size()), 1) !=
+        XML_STATUS_OK)
         return fail(std::string(path) + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) + ": " +
                     XML_ErrorString(XML_GetErrorCode(parser.get())));
     if (state.root != "svg" || !state.rootHasSize) return fail("the root element is not <svg width height>");
@@ -141,8 +137,7 @@ int checkSame(const char* a, const char* b, int top, int tolerance) {
                 last = std::max(last, row);
             }
         }
-    std::printf("%s vs %s below row %d: %ld channel values differ, by at most %d", a, b, top, differing,
-                worst);
+    std::printf("%s vs %s below row %d: %ld channel values differ, by at most %d", a, b, top, differing, worst);
     if (differing > 0) std::printf(" (within x %d..%d, y %d..%d)", left, right, first, last);
     std::printf("\n");
     if (worst > tolerance) return fail("the pictures differ by more than " + std::to_string(tolerance));
@@ -155,7 +150,6 @@ int main(int argc, char** argv) {
     const std::string mode = argc > 1 ? argv[1] : "";
     if (mode == "png" && argc == 3) return checkPng(argv[2]);
     if (mode == "svg" && argc == 3) return checkSvg(argv[2]);
-    if (mode == "same" && argc == 6)
-        return checkSame(argv[2], argv[3], std::atoi(argv[4]), std::atoi(argv[5]));
+    if (mode == "same" && argc == 6) return checkSame(argv[2], argv[3], std::atoi(argv[4]), std::atoi(argv[5]));
     return fail("usage: afb_picture_check png FILE | svg FILE | same A.png B.png SKIP_TOP TOLERANCE");
 }

@@ -4,11 +4,11 @@
 //   3. spawn two ragdolls of that figure (they share collision shapes),
 //   4. step 2 seconds at 60 Hz and print the md5 joint positions of the first ragdoll.
 // Usage: ragdoll_example [CONTENT_DIR] [ENTITY]   (defaults: . chain)
-#include <afb/afb.h>
-
 #include <cstdio>
 #include <iostream>
 #include <string>
+
+#include <afb/afb.h>
 
 int main(int argc, char** argv) {
     const std::string base = argc > 1 ? argv[1] : ".";

@@ -26,7 +26,8 @@ std::vector<fs::path> afFilesUnder(const fs::path& dir) {
     for (const auto& e : fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied)) {
         if (!e.is_regular_file()) continue;
         std::string ext = e.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        std::transform(ext.begin(), ext.end(), ext.begin(),
+                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
         if (ext == ".af") out.push_back(e.path());
     }
     std::sort(out.begin(), out.end());
@@ -111,8 +112,8 @@ TEST_CASE("corpus: every .af file parses without errors and round-trips", "[corp
             CHECK(decl.order.size() == decl.bodies.size() + decl.constraints.size() + decl.settings.size());
         }
         CHECK(bodies == countBlockLines(text, {"body"}));
-        CHECK(constraints == countBlockLines(text, {"fixed", "ballAndSocketJoint", "universalJoint", "hinge",
-                                                    "slider", "spring"}));
+        CHECK(constraints ==
+              countBlockLines(text, {"fixed", "ballAndSocketJoint", "universalJoint", "hinge", "slider", "spring"}));
 
         // Round trip and idempotent writing.
         const std::string w1 = writeAf(*f);

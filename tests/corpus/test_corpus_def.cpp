@@ -1,13 +1,14 @@
 // The .def parser and the Library on real files (../shared/data; skipped when absent).
-#include "TestSupport.h"
-#include "afb/decl/Def.h"
-#include "afb/decl/Library.h"
+#include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "TestSupport.h"
+#include "afb/decl/Def.h"
+#include "afb/decl/Library.h"
 
 using namespace afb;
 namespace fs = std::filesystem;
@@ -144,7 +145,6 @@ TEST_CASE("corpus: the zsec entities resolve to mesh, af_pose and figure", "[cor
     SECTION("an entity whose mesh is not in the corpus names the missing file") {
         text::Diagnostics rd;
         CHECK_FALSE(lib->resolveEntity("env_ragdoll_boney", rd));
-        CHECK_THAT(rd.str(),
-                   Contains("mesh file 'models/md5/monsters/zombies/boney/boney.md5mesh' not found"));
+        CHECK_THAT(rd.str(), Contains("mesh file 'models/md5/monsters/zombies/boney/boney.md5mesh' not found"));
     }
 }

@@ -1,14 +1,15 @@
 // The md5 parsers on real files written by other tools (../shared/data; skipped when absent). The facts
 // checked here were read off the files with grep, independently of the parser.
-#include "TestSupport.h"
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
+#include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "TestSupport.h"
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
 
 using namespace afb;
 namespace fs = std::filesystem;
@@ -98,8 +99,7 @@ TEST_CASE("corpus md5: malformed files are rejected with a located, specific err
     };
     const Case cases[] = {
         {"assimp-md5/test/models/MD5/invalid/InvalidBoneIndex.md5mesh", "refers to joint 999", 23},
-        {"assimp-md5/test/models/MD5/invalid/OverflowingTriangleIndex.md5mesh", "triangle index 4294967295",
-         18},
+        {"assimp-md5/test/models/MD5/invalid/OverflowingTriangleIndex.md5mesh", "triangle index 4294967295", 18},
         {"assimp-md5/test/models/MD5/invalid/OverflowingVertexIndex.md5mesh", "vertex index 4294967295", 15},
         {"assimp-md5/test/models/MD5/invalid/OverflowingWeightIndex.md5mesh", "weight index 4294967295", 21},
         {"assimp-md5/test/models/MD5/malformed_weight_index.md5mesh", "uses weights 1000000..1000001", 18},

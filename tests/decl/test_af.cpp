@@ -465,9 +465,7 @@ TEST_CASE("af: a figure with every block and key", "[af]") {
         for (std::size_t i = 0; i < 8; ++i) CHECK(d.order[7 + i] == AfBlockRef{AfBlockRef::Kind::Constraint, i});
     }
 
-    SECTION("defaultBody1: the first body parsed before the constraint") {
-        CHECK(d.defaultBody1(2) == "pelvis");
-    }
+    SECTION("defaultBody1: the first body parsed before the constraint") { CHECK(d.defaultBody1(2) == "pelvis"); }
 }
 
 TEST_CASE("af: the illustrative example of af-format §1.8", "[af]") {
@@ -730,9 +728,9 @@ TEST_CASE("af: vector forms with and without '-' (§1.2)", "[af][vector]") {
         const std::string v = c.text;
         const AfDecl d = parseOne(fig("body \"b\" { joint \"x\" origin " + v + " frictionDirection " + v +
                                       " contactMotorDirection " + v + " model box( " + v + ", " + v + " ) }\n" +
-                                      "hinge \"h\" { anchor " + v + " axis " + v + " }\n" +
-                                      "spring \"s\" { anchor1 " + v + " anchor2 " + v + " }\n" +
-                                      "universalJoint \"u\" { shafts " + v + ", " + v + " coneLimit " + v + ", 5 }"));
+                                      "hinge \"h\" { anchor " + v + " axis " + v + " }\n" + "spring \"s\" { anchor1 " +
+                                      v + " anchor2 " + v + " }\n" + "universalJoint \"u\" { shafts " + v + ", " + v +
+                                      " coneLimit " + v + ", 5 }"));
         const AfBody& b = d.bodies[0];
         CHECK(b.origin == c.expected);
         CHECK(b.frictionDirection == c.expected);
@@ -802,7 +800,8 @@ TEST_CASE("af: the six shapes and their parameters (§1.5)", "[af][shape]") {
     };
     for (const Case& c : cases) {
         INFO(c.text);
-        const AfShape s = *parseOne(fig(std::string("body \"b\" { joint \"x\" model ") + c.text + " }")).bodies[0].model;
+        const AfShape s =
+            *parseOne(fig(std::string("body \"b\" { joint \"x\" model ") + c.text + " }")).bodies[0].model;
         CHECK(s.kind == c.kind);
         CHECK(s.v1 == lit(-1, -2, -3));
         CHECK(s.v2 == lit(1, 2, 3));
@@ -818,10 +817,11 @@ TEST_CASE("af: the six shapes and their parameters (§1.5)", "[af][shape]") {
         CHECK(d.bodies[2].model->numSides == 3);
     }
     SECTION("bone takes two points and a float width") {
-        const AfShape s = *parseOne(fig("body \"b\" { joint \"x\" model bone( joint( \"a\" ), bonecenter( \"b\", \"c\" ), "
-                                        "2.75 ) }"))
-                               .bodies[0]
-                               .model;
+        const AfShape s =
+            *parseOne(fig("body \"b\" { joint \"x\" model bone( joint( \"a\" ), bonecenter( \"b\", \"c\" ), "
+                          "2.75 ) }"))
+                 .bodies[0]
+                 .model;
         CHECK(s.kind == ShapeKind::Bone);
         CHECK(s.v1 == jointVec("a"));
         CHECK(s.v2 == twoJoints(AfVector::Form::BoneCenter, "b", "c"));
@@ -1043,8 +1043,7 @@ TEST_CASE("af: constraint keys per type", "[af][constraint]") {
         CHECK_FALSE(p.shaft.has_value());
     }
     SECTION("hinge: negative limit values") {
-        const AfConstraint c =
-            parseOne(fig("hinge \"h\" { axis ( 0, 1, 0 ) limit -10, 20.5, - 30 }")).constraints[0];
+        const AfConstraint c = parseOne(fig("hinge \"h\" { axis ( 0, 1, 0 ) limit -10, 20.5, - 30 }")).constraints[0];
         const auto& h = std::get<HingeLimit>(c.limit);
         CHECK(h.orientationDeg == -10.0);
         CHECK(h.widthDeg == 20.5);
@@ -1068,11 +1067,11 @@ TEST_CASE("af: constraint keys per type", "[af][constraint]") {
         CHECK_FALSE(c.maxLength.has_value());
     }
     SECTION("if several limits are given, the last one wins") {
-        const AfDecl d = parseOne(fig(
-            "ballAndSocketJoint \"a\" { coneLimit ( 0, 0, 1 ), 30, ( 0, 0, 1 ) pyramidLimit ( 1, 0, 0 ), 1, 2, 3, "
-            "( 0, 1, 0 ) }\n"
-            "universalJoint \"b\" { pyramidLimit ( 1, 0, 0 ), 1, 2, 3 coneLimit ( 0, 0, -1 ), 45 }\n"
-            "hinge \"c\" { limit 1, 2, 3 limit 4, 5, 6 }"));
+        const AfDecl d = parseOne(
+            fig("ballAndSocketJoint \"a\" { coneLimit ( 0, 0, 1 ), 30, ( 0, 0, 1 ) pyramidLimit ( 1, 0, 0 ), 1, 2, 3, "
+                "( 0, 1, 0 ) }\n"
+                "universalJoint \"b\" { pyramidLimit ( 1, 0, 0 ), 1, 2, 3 coneLimit ( 0, 0, -1 ), 45 }\n"
+                "hinge \"c\" { limit 1, 2, 3 limit 4, 5, 6 }"));
         const auto& p = std::get<PyramidLimit>(d.constraints[0].limit);
         CHECK(p.axis == lit(1, 0, 0));
         CHECK(p.shaft == lit(0, 1, 0));
@@ -1213,7 +1212,8 @@ TEST_CASE("af: duplicate names", "[af][names]") {
         CHECK((e->where.column == keyword.second || e->where.column == name.second));
     };
     SECTION("exact duplicate body names are an error") {
-        expectDuplicateError(fig("body \"a\" { joint \"origin\" }\nbody \"b\" { joint \"x\" }\n  @body ^\"a\" { joint \"y\" }"));
+        expectDuplicateError(
+            fig("body \"a\" { joint \"origin\" }\nbody \"b\" { joint \"x\" }\n  @body ^\"a\" { joint \"y\" }"));
     }
     SECTION("exact duplicate constraint names are an error, whatever the types") {
         expectDuplicateError(fig("fixed \"c\" { }\n @hinge ^\"c\" { }"));
@@ -1309,8 +1309,9 @@ settings { totalMass 3 }
 fixed "f2" { }
 )"));
     using K = AfBlockRef::Kind;
-    const std::vector<AfBlockRef> expected = {{K::Constraint, 0}, {K::Body, 0}, {K::Settings, 0}, {K::Constraint, 1},
-                                              {K::Body, 1},       {K::Settings, 1}, {K::Constraint, 2}};
+    const std::vector<AfBlockRef> expected = {{K::Constraint, 0}, {K::Body, 0}, {K::Settings, 0},
+                                              {K::Constraint, 1}, {K::Body, 1}, {K::Settings, 1},
+                                              {K::Constraint, 2}};
     CHECK(d.order == expected);
     CHECK(d.constraints[0].name == "h0");
     CHECK(d.constraints[1].name == "s1");
@@ -1362,7 +1363,8 @@ TEST_CASE("af: writer round trips awkward values", "[af][writer]") {
         CHECK(d.settings[0].noMoveRotation == 1e300);
     }
     SECTION("large finite floats") {
-        const AfDecl d = parseOne(fig("settings { totalMass 23456789012345678000.0 maxMoveTime 1.8446744073709552e19 }"));
+        const AfDecl d =
+            parseOne(fig("settings { totalMass 23456789012345678000.0 maxMoveTime 1.8446744073709552e19 }"));
         CHECK(d.settings[0].totalMass == 23456789012345678000.0);
     }
     SECTION("names with spaces and punctuation") {
@@ -1426,8 +1428,8 @@ TEST_CASE("af: hostile input never crashes", "[af][hostile]") {
         std::mt19937 rng(20240611u);
         std::uniform_int_distribution<int> byte(0, 255);
         std::uniform_int_distribution<int> count(1, 4);
-        const char interesting[] = {'{', '}', '(', ')', ',', '-', '"', '\'', '/', '*', '0', '9', '.', '#', 'e', '\n',
-                                    '\0', 'x', ' ', '\\'};
+        const char interesting[] = {'{', '}', '(', ')', ',', '-',  '"',  '\'', '/', '*',
+                                    '0', '9', '.', '#', 'e', '\n', '\0', 'x',  ' ', '\\'};
         std::uniform_int_distribution<std::size_t> pick(0, sizeof interesting - 1);
         for (int i = 0; i < 600; ++i) {
             std::string text = base;

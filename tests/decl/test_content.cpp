@@ -52,8 +52,10 @@ TEST_CASE("bundled content covers every shape, constraint, limit and vector form
                 if (b.inertiaScale) c.seen.insert("body inertiaScale");
                 if (b.friction) c.seen.insert("body friction");
                 if (b.selfCollision) c.seen.insert("body selfCollision");
-                if (b.containedJoints && b.containedJoints->find('*') != std::string::npos) c.seen.insert("containedJoints *");
-                if (b.containedJoints && b.containedJoints->find('-') != std::string::npos) c.seen.insert("containedJoints -");
+                if (b.containedJoints && b.containedJoints->find('*') != std::string::npos)
+                    c.seen.insert("containedJoints *");
+                if (b.containedJoints && b.containedJoints->find('-') != std::string::npos)
+                    c.seen.insert("containedJoints -");
             }
             for (const AfConstraint& k : d.constraints) {
                 c.seen.insert(std::string("constraint ") + keywordOf(k.type));
@@ -76,14 +78,35 @@ TEST_CASE("bundled content covers every shape, constraint, limit and vector form
         }
     }
     CHECK(files >= 5);
-    const char* required[] = {
-        "shape box", "shape octahedron", "shape dodecahedron", "shape cylinder", "shape cone", "shape bone",
-        "constraint fixed", "constraint ballAndSocketJoint", "constraint universalJoint", "constraint hinge",
-        "constraint slider", "constraint spring", "ballAndSocketJoint coneLimit", "ballAndSocketJoint pyramidLimit",
-        "universalJoint coneLimit", "universalJoint pyramidLimit", "hinge off-centre limit", "spring min/max length",
-        "vector literal", "vector joint", "vector bonecenter", "vector bonedir", "vector negated",
-        "containedJoints *", "containedJoints -", "body selfCollision", "body friction", "settings totalMass",
-        "body inertiaScale"};
+    const char* required[] = {"shape box",
+                              "shape octahedron",
+                              "shape dodecahedron",
+                              "shape cylinder",
+                              "shape cone",
+                              "shape bone",
+                              "constraint fixed",
+                              "constraint ballAndSocketJoint",
+                              "constraint universalJoint",
+                              "constraint hinge",
+                              "constraint slider",
+                              "constraint spring",
+                              "ballAndSocketJoint coneLimit",
+                              "ballAndSocketJoint pyramidLimit",
+                              "universalJoint coneLimit",
+                              "universalJoint pyramidLimit",
+                              "hinge off-centre limit",
+                              "spring min/max length",
+                              "vector literal",
+                              "vector joint",
+                              "vector bonecenter",
+                              "vector bonedir",
+                              "vector negated",
+                              "containedJoints *",
+                              "containedJoints -",
+                              "body selfCollision",
+                              "body friction",
+                              "settings totalMass",
+                              "body inertiaScale"};
     for (const char* r : required) {
         INFO("missing from af/: " << r);
         CHECK(c.seen.count(r) == 1);

@@ -1,9 +1,10 @@
 // Unit tests of the .def parser (af-format §7.1 model decls, §7.2 entityDef keys) on texts written for the
 // purpose.
-#include "afb/decl/Def.h"
-
 #include <catch2/catch.hpp>
+
 #include <string>
+
+#include "afb/decl/Def.h"
 
 using namespace afb;
 using Catch::Matchers::Contains;
@@ -97,7 +98,7 @@ TEST_CASE("parseDef reads entityDefs and model decls, and skips other decl types
         CHECK(e.keyValues[0] == std::pair<std::string, std::string>{"inherit", "zombie_default"});
         CHECK(e.keyValues[2] == std::pair<std::string, std::string>{"Ragdoll", "monster_base"});
         CHECK(e.keyValues[5] == std::pair<std::string, std::string>{"number", "12"}); // an unquoted value
-        CHECK(e.get("ragdoll") == "monster_base"); // case-insensitive, as idDict
+        CHECK(e.get("ragdoll") == "monster_base");                                    // case-insensitive, as idDict
         CHECK(e.get("LOOK_JOINT waist") == "0.1333 0.1333 0");
         CHECK_FALSE(e.get("missing"));
         CHECK(e.has("MODEL"));
@@ -132,8 +133,7 @@ TEST_CASE("parseDef reads entityDefs and model decls, and skips other decl types
         CHECK(m.anims[1].files.size() == 3);
         CHECK(m.anims[1].files[2] == "models/md5/base/walk_c.md5anim");
         REQUIRE(m.anims[1].block);
-        CHECK(*m.anims[1].block ==
-              "\n\t\tframe 4\t\tsound_body footstep\n\t\tframe 12\t{ nested { braces } }\n\t");
+        CHECK(*m.anims[1].block == "\n\t\tframe 4\t\tsound_body footstep\n\t\tframe 12\t{ nested { braces } }\n\t");
         CHECK(m.anims[1].location.line == 9);
         CHECK(m.anims[2].name == "pain1");
         CHECK(m.anims[2].alias() == "pain");
@@ -171,8 +171,8 @@ TEST_CASE("a duplicate entityDef key is a warning and the later value wins", "[d
     REQUIRE(file);
     CHECK(diags.errorCount() == 0);
     CHECK(diags.warningCount() == 1);
-    CHECK_THAT(firstWarning(diags), StartsWith("test.def:3:3: warning:") &&
-                                        Contains("'MODEL' already defined") && Contains("line 2"));
+    CHECK_THAT(firstWarning(diags),
+               StartsWith("test.def:3:3: warning:") && Contains("'MODEL' already defined") && Contains("line 2"));
     CHECK(file->entityDefs[0].keyValues.size() == 2);
     CHECK(file->entityDefs[0].get("model") == "b");
 }
@@ -185,15 +185,14 @@ TEST_CASE("entityDef errors are located and load nothing", "[def]") {
     CHECK_THAT(firstError("entityDef e {\n  \"model\" \"x\"\n"),
                StartsWith("test.def:3:1: error:") && Contains("missing '}'"));
     CHECK_THAT(firstError("entityDef e {\n  \"model\""), Contains("has no value"));
-    CHECK_THAT(firstError("entityDef e \"x\" {\n}\n"),
-               StartsWith("test.def:1:13: error:") && Contains("'{'"));
+    CHECK_THAT(firstError("entityDef e \"x\" {\n}\n"), StartsWith("test.def:1:13: error:") && Contains("'{'"));
 }
 
 TEST_CASE("model decl errors name the problem and its line", "[def]") {
     SECTION("keywords are case-sensitive") {
-        CHECK_THAT(firstError("model m {\n\tMesh models/a.md5mesh\n}\n"),
-                   StartsWith("test.def:2:2: error:") && Contains("unknown keyword 'Mesh'") &&
-                       Contains("case-sensitive"));
+        CHECK_THAT(firstError("model m {\n\tMesh models/a.md5mesh\n}\n"), StartsWith("test.def:2:2: error:") &&
+                                                                              Contains("unknown keyword 'Mesh'") &&
+                                                                              Contains("case-sensitive"));
     }
     SECTION("mesh needs the md5mesh extension") {
         CHECK_THAT(firstError("model m {\n\tmesh models/a.lwo\n}\n"),
@@ -203,8 +202,7 @@ TEST_CASE("model decl errors name the problem and its line", "[def]") {
     SECTION("anim and channel need a mesh first (or inherit)") {
         CHECK_THAT(firstError("model m {\n\tanim af_pose a.md5anim\n\tmesh a.md5mesh\n}\n"),
                    StartsWith("test.def:2:2: error:") && Contains("'anim' before 'mesh'"));
-        CHECK_THAT(firstError("model m {\n\tchannel torso ( *Waist )\n}\n"),
-                   Contains("'channel' before 'mesh'"));
+        CHECK_THAT(firstError("model m {\n\tchannel torso ( *Waist )\n}\n"), Contains("'channel' before 'mesh'"));
         text::Diagnostics diags;
         CHECK(parse("model m {\n\tinherit p\n\tanim af_pose a.md5anim\n}\n", diags));
     }
@@ -223,23 +221,20 @@ TEST_CASE("model decl errors name the problem and its line", "[def]") {
         CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tchannel legs ( *Hips\n}\n"),
                    StartsWith("test.def:4:1: error:") && Contains("expected ')'"));
         text::Diagnostics diags;
-        const auto f =
-            parse("model m {\n\tmesh a.md5mesh\n\tchannel EYELIDS ( - * Leye * Reye )\n}\n", diags);
+        const auto f = parse("model m {\n\tmesh a.md5mesh\n\tchannel EYELIDS ( - * Leye * Reye )\n}\n", diags);
         REQUIRE(f);
         CHECK(f->models[0].channels[0].joints == "-*Leye *Reye");
     }
     SECTION("anims: at most three files, valid names, no duplicates") {
-        CHECK_THAT(
-            firstError(
-                "model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim, b.md5anim, c.md5anim, d.md5anim\n}\n"),
-            StartsWith("test.def:3:45: error:") && Contains("more than 3"));
+        CHECK_THAT(firstError(
+                       "model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim, b.md5anim, c.md5anim, d.md5anim\n}\n"),
+                   StartsWith("test.def:3:45: error:") && Contains("more than 3"));
         CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tanim a1 a.md5anim\n}\n"),
                    StartsWith("test.def:3:7: error:") && Contains("invalid animation name 'a1'"));
         CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tanim 12 a.md5anim\n}\n"),
                    Contains("invalid animation name '12'"));
-        CHECK_THAT(
-            firstError("model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim\n\tanim walk b.md5anim\n}\n"),
-            StartsWith("test.def:4:7: error:") && Contains("duplicate anim 'walk'"));
+        CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim\n\tanim walk b.md5anim\n}\n"),
+                   StartsWith("test.def:4:7: error:") && Contains("duplicate anim 'walk'"));
         CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim,\n}\n"),
                    StartsWith("test.def:4:1: error:") && Contains("expected an .md5anim file"));
         CHECK_THAT(firstError("model m {\n\tmesh a.md5mesh\n\tanim walk a.md5anim {\n\t\tframe 1 { x\n}\n"),
@@ -259,8 +254,8 @@ TEST_CASE("model decl errors name the problem and its line", "[def]") {
 
 TEST_CASE("inherit after other statements drops them, as the engine's CopyDecl does", "[def]") {
     text::Diagnostics diags;
-    const auto f = parse(
-        "model m {\n\tmesh a.md5mesh\n\tanim af_pose a.md5anim\n\tinherit p\n\toffset ( 0 0 1 )\n}\n", diags);
+    const auto f =
+        parse("model m {\n\tmesh a.md5mesh\n\tanim af_pose a.md5anim\n\tinherit p\n\toffset ( 0 0 1 )\n}\n", diags);
     REQUIRE(f);
     CHECK(diags.warningCount() == 1);
     CHECK_THAT(firstWarning(diags), StartsWith("test.def:4:2: warning:") && Contains("dropped"));
@@ -289,8 +284,8 @@ TEST_CASE("anim name rules and aliases follow idDeclModelDef::ParseAnim", "[def]
 
 TEST_CASE("parseDef survives hostile nesting and garbage without recursion", "[def]") {
     SECTION("deeply nested anim block") {
-        const std::string deep = "model m {\n mesh a.md5mesh\n anim walk a.md5anim " +
-                                 std::string(200000, '{') + std::string(200000, '}') + "\n}\n";
+        const std::string deep = "model m {\n mesh a.md5mesh\n anim walk a.md5anim " + std::string(200000, '{') +
+                                 std::string(200000, '}') + "\n}\n";
         text::Diagnostics diags;
         const auto f = parse(deep, diags);
         REQUIRE(f);
@@ -325,8 +320,8 @@ TEST_CASE("loadDef reports a missing file", "[def]") {
 TEST_CASE("a '\\' between strings continues the string (LEXFL_ALLOWBACKSLASHSTRINGCONCAT)", "[def]") {
     // As in monster_default.def's "editor_var trigger"; the shared lexer joins the strings.
     text::Diagnostics diags;
-    const auto f = parse(
-        "entityDef e {\n\t\"a\"\t\"one, \" \\\n\t\t\"two\" \\ /* c */ \"!\"\n\t\"b\" \"x\"\n}\n", diags);
+    const auto f =
+        parse("entityDef e {\n\t\"a\"\t\"one, \" \\\n\t\t\"two\" \\ /* c */ \"!\"\n\t\"b\" \"x\"\n}\n", diags);
     INFO(diags.str());
     REQUIRE(f);
     REQUIRE(f->entityDefs[0].keyValues.size() == 2);

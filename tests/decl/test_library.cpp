@@ -1,14 +1,15 @@
 // Unit tests of decl::Library: indexing a content folder and resolving entity → model → mesh/af_pose/figure
 // (af-format §7.1, §7.2), on a temporary folder written by the tests.
-#include "TestSupport.h"
-#include "afb/decl/Library.h"
+#include <catch2/catch.hpp>
 
 #include <atomic>
-#include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+
+#include "TestSupport.h"
+#include "afb/decl/Library.h"
 
 using namespace afb;
 namespace fs = std::filesystem;
@@ -139,9 +140,7 @@ void writeStandard(const TempBase& base) {
     base.write("models/m/af_pose.md5anim", "MD5Version 10\n");
 }
 
-std::string joined(const text::Diagnostics& diags) {
-    return diags.str();
-}
+std::string joined(const text::Diagnostics& diags) { return diags.str(); }
 
 } // namespace
 
@@ -155,8 +154,7 @@ TEST_CASE("Library::open indexes af/ and def/, reports broken files and keeps th
 
     SECTION("a broken file is an error and none of its decls is indexed") {
         CHECK(diags.errorCount() == 1);
-        CHECK_THAT(joined(diags),
-                   Contains("broken.def:3:2: error:") && Contains("expected a \"quoted\" key"));
+        CHECK_THAT(joined(diags), Contains("broken.def:3:2: error:") && Contains("expected a \"quoted\" key"));
         REQUIRE(lib->failedFiles().size() == 1);
         CHECK(lib->failedFiles()[0].filename() == "broken.def");
         CHECK_FALSE(lib->findEntityDef("broken_ent"));
@@ -182,11 +180,10 @@ TEST_CASE("Library::open indexes af/ and def/, reports broken files and keeps th
     }
 
     SECTION("duplicates (case-insensitive) are warnings with both locations; the first in path order wins") {
-        CHECK_THAT(joined(diags), Contains("y.def:2:1: warning: entityDef 'MONSTER' is also defined at ") &&
-                                      Contains("x.def:45:1"));
         CHECK_THAT(joined(diags),
-                   Contains("b.af:6:1: warning: articulatedFigure 'FIG_A' is also defined at ") &&
-                       Contains("a.af:2:1"));
+                   Contains("y.def:2:1: warning: entityDef 'MONSTER' is also defined at ") && Contains("x.def:45:1"));
+        CHECK_THAT(joined(diags), Contains("b.af:6:1: warning: articulatedFigure 'FIG_A' is also defined at ") &&
+                                      Contains("a.af:2:1"));
         CHECK(lib->findEntityDef("monster")->file.filename() == "x.def");
         CHECK(lib->findFigure("fig_a")->file.filename() == "a.af");
         CHECK(lib->findFigure("fig_a")->decl.bodies[0].name == "b");
@@ -248,8 +245,7 @@ TEST_CASE("resolveEntity merges inherit chains and finds mesh, af_pose and figur
     CHECK(r->model.removes.empty());
     REQUIRE(r->model.channels.size() == 1); // TORSO replaces torso (channel names are case-insensitive)
     CHECK(r->model.channels[0].joints == "*Chest");
-    REQUIRE(r->model.anims.size() ==
-            3); // pain1 and pain2 removed by alias, idle overridden in place, run added
+    REQUIRE(r->model.anims.size() == 3); // pain1 and pain2 removed by alias, idle overridden in place, run added
     CHECK(r->model.anims[0].name == "af_pose");
     CHECK(r->model.anims[1].name == "idle");
     CHECK(r->model.anims[1].files[0] == "models/m/idle2.md5anim");
@@ -275,11 +271,9 @@ TEST_CASE("resolveEntity follows diamonds in inherit order", "[library]") {
     const auto r = lib->resolveEntity("diamond", diags);
     INFO(diags.str());
     REQUIRE(r);
-    CHECK(r->entityChain ==
-          std::vector<std::string>{"diamond", "diamond_left", "diamond_top", "diamond_right"});
+    CHECK(r->entityChain == std::vector<std::string>{"diamond", "diamond_left", "diamond_top", "diamond_right"});
     CHECK(r->get("a") == "left");
-    CHECK(r->get("b") ==
-          "top"); // diamond_left's parents fill in before diamond_right (idDict::SetDefaults order)
+    CHECK(r->get("b") == "top"); // diamond_left's parents fill in before diamond_right (idDict::SetDefaults order)
     CHECK(r->get("c") == "top");
     CHECK_FALSE(r->get("inherit2"));
 }
@@ -298,25 +292,19 @@ TEST_CASE("resolveEntity reports each kind of broken reference", "[library]") {
     };
 
     CHECK_THAT(errorOf("nope"), Contains("error: entityDef 'nope' not found"));
-    CHECK_THAT(
-        errorOf("ent_cycle2"),
-        Contains("x.def:50:1: error: entityDef inherit cycle: ent_cycle2 -> ent_cycle3 -> ent_cycle1 -> "
-                 "ent_cycle2"));
-    CHECK_THAT(
-        errorOf("ent_missing_parent"),
-        Contains(
-            "x.def:53:1: error: entityDef 'ent_missing_parent' inherits 'nobody', which is not defined"));
-    CHECK_THAT(
-        errorOf("ent_nopose"),
-        Contains("x.def:18:1: error: model decl Model_NoPose has no anim af_pose (a ragdoll needs it)"));
+    CHECK_THAT(errorOf("ent_cycle2"),
+               Contains("x.def:50:1: error: entityDef inherit cycle: ent_cycle2 -> ent_cycle3 -> ent_cycle1 -> "
+                        "ent_cycle2"));
+    CHECK_THAT(errorOf("ent_missing_parent"),
+               Contains("x.def:53:1: error: entityDef 'ent_missing_parent' inherits 'nobody', which is not defined"));
+    CHECK_THAT(errorOf("ent_nopose"),
+               Contains("x.def:18:1: error: model decl Model_NoPose has no anim af_pose (a ragdoll needs it)"));
     CHECK_THAT(errorOf("ent_mesh_model"), Contains("a mesh file, not a model decl"));
-    CHECK_THAT(errorOf("ent_missing_fig"),
-               Contains("articulatedFigure 'fig_zzz'") && Contains("not found in af/"));
+    CHECK_THAT(errorOf("ent_missing_fig"), Contains("articulatedFigure 'fig_zzz'") && Contains("not found in af/"));
     CHECK_THAT(errorOf("ent_no_fig"), Contains("neither \"articulatedFigure\" nor \"ragdoll\""));
-    CHECK_THAT(
-        errorOf("ent_bad_remove"),
-        Contains("x.def:28:1: error: model decl 'model_bad_remove' removes anim 'walk', which it does not "
-                 "inherit"));
+    CHECK_THAT(errorOf("ent_bad_remove"),
+               Contains("x.def:28:1: error: model decl 'model_bad_remove' removes anim 'walk', which it does not "
+                        "inherit"));
     CHECK_THAT(errorOf("ent_missing_mesh"),
                Contains("x.def:32:1: error: mesh file 'models/m/nothere.md5mesh' not found"));
     CHECK_THAT(errorOf("ent_escape"), Contains("mesh path '../outside.md5mesh' must be relative"));

@@ -1,10 +1,11 @@
 // Unit tests of the md5mesh and md5anim parsers (af-format §7.3, §7.4) on small texts written for the
 // purpose.
+#include <catch2/catch.hpp>
+
+#include <string>
+
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
-
-#include <catch2/catch.hpp>
-#include <string>
 
 using namespace afb;
 using decl::Vec3;
@@ -186,8 +187,7 @@ TEST_CASE("md5mesh: equality ignores where the text came from", "[md5][mesh]") {
 
 TEST_CASE("md5mesh: an octal-looking number is read as octal with a warning", "[md5][mesh]") {
     text::Diagnostics diags;
-    const auto mesh =
-        decl::parseMd5Mesh(replaced(kMesh, "vert 2 ( 1 1 ) 0 3", "vert 2 ( 1 1 ) 00 03"), "t", diags);
+    const auto mesh = decl::parseMd5Mesh(replaced(kMesh, "vert 2 ( 1 1 ) 0 3", "vert 2 ( 1 1 ) 00 03"), "t", diags);
     REQUIRE(mesh);
     CHECK(diags.errorCount() == 0);
     CHECK(diags.warningCount() == 2);
@@ -210,18 +210,15 @@ TEST_CASE("md5mesh: counts larger than the input are rejected before allocating"
                      "numJoints 2000000000 is more than the file can hold", 4);
     requireMeshError(replaced(kMesh, "numMeshes 2", "numMeshes 2000000000"),
                      "numMeshes 2000000000 is more than the file can hold", 5);
-    requireMeshError(replaced(kMesh, "numverts 3", "numverts 2147483647"), "numverts 2147483647 is more than",
-                     16);
+    requireMeshError(replaced(kMesh, "numverts 3", "numverts 2147483647"), "numverts 2147483647 is more than", 16);
     requireMeshError(replaced(kMesh, "numtris 1", "numtris 100000"), "numtris 100000 is more than", 20);
     requireMeshError(replaced(kMesh, "numweights 3", "numweights 1000"), "numweights 1000 is more than", 22);
     requireMeshError(replaced(kMesh, "numJoints 3", "numJoints 99999999999"), "numJoints", 4);
-    requireMeshError("MD5Version 10 commandline \"\" numJoints 2 numMeshes 0 joints {", "numJoints 2 is more",
-                     1);
+    requireMeshError("MD5Version 10 commandline \"\" numJoints 2 numMeshes 0 joints {", "numJoints 2 is more", 1);
 }
 
 TEST_CASE("md5mesh: joints block errors", "[md5][mesh][errors]") {
-    requireMeshError(replaced(kMesh, "numJoints 3", "numJoints 4"), "the joints block ends after 3 joints",
-                     11);
+    requireMeshError(replaced(kMesh, "numJoints 3", "numJoints 4"), "the joints block ends after 3 joints", 11);
     requireMeshError(replaced(kMesh, "numJoints 3", "numJoints 2"), "more joints than numJoints", 10);
     requireMeshError(replaced(kMesh, "\"Body\" 0", "\"Body\" 2"), "parents must precede children", 9);
     requireMeshError(replaced(kMesh, "\"Body\" 0", "\"Body\" 1"), "joint 1 \"Body\" has parent 1", 9);
@@ -242,11 +239,9 @@ TEST_CASE("md5mesh: mesh block structure errors", "[md5][mesh][errors]") {
     requireMeshError(replaced(kMesh, "numMeshes 2", "numMeshes 3"), "the file ends after 2 mesh blocks", 34);
     requireMeshError(replaced(kMesh, "numMeshes 2", "numMeshes 1"), "more mesh blocks than numMeshes 1", 28);
     requireMeshError(kMesh + "extra\n", "unexpected 'extra' after the last mesh block", 34);
-    requireMeshError(replaced(kMesh, "shader \"models/test/skin\"", "material \"x\""), "expected 'shader'",
-                     15);
+    requireMeshError(replaced(kMesh, "shader \"models/test/skin\"", "material \"x\""), "expected 'shader'", 15);
     requireMeshError(replaced(kMesh, "name \"skin\"", "name skin"), "mesh name", 14);
-    requireMeshError(replaced(kMesh, "numtris 1", "numtris 1\n\tflat 1"),
-                     "expected 'tri' line 0 of numtris 1", 21);
+    requireMeshError(replaced(kMesh, "numtris 1", "numtris 1\n\tflat 1"), "expected 'tri' line 0 of numtris 1", 21);
     requireMeshError(replaced(kMesh, "\tnumweights 0\n}", "\tnumweights 0\n\tflags 1\n}"),
                      "expected '}' closing mesh block 1", 33);
 }
@@ -264,8 +259,7 @@ TEST_CASE("md5mesh: vertex errors", "[md5][mesh][errors]") {
 
 TEST_CASE("md5mesh: triangle errors", "[md5][mesh][errors]") {
     requireMeshError(replaced(kMesh, "tri 0 0 2 1", "tri 1 0 2 1"), "triangle index 1 should be 0", 21);
-    requireMeshError(replaced(kMesh, "tri 0 0 2 1", "tri 0 0 3 1"), "triangle 0 uses vertex 3, out of range",
-                     21);
+    requireMeshError(replaced(kMesh, "tri 0 0 2 1", "tri 0 0 3 1"), "triangle 0 uses vertex 3, out of range", 21);
     requireMeshError(replaced(kMesh, "tri 0 0 2 1", "tri 0 0 2 -1"), "triangle 0 uses vertex -1", 21);
     requireMeshError(replaced(kMesh, "numtris 1", "numtris 0"), "more 'tri' lines than numtris 0", 21);
 }
@@ -275,21 +269,16 @@ TEST_CASE("md5mesh: weight errors", "[md5][mesh][errors]") {
                      "weight 1 refers to joint 3, out of range (numJoints 3)", 24);
     requireMeshError(replaced(kMesh, "weight 1 1 0.75", "weight 1 -1 0.75"), "refers to joint -1", 24);
     requireMeshError(replaced(kMesh, "weight 2 2", "weight 1 2"), "weight index 1 should be 2", 25);
-    requireMeshError(replaced(kMesh, "numweights 3", "numweights 2"), "more 'weight' lines than numweights 2",
-                     25);
-    requireMeshError(replaced(kMesh, "numweights 3", "numweights 4"),
-                     "expected 'weight' line 3 of numweights 4", 26);
+    requireMeshError(replaced(kMesh, "numweights 3", "numweights 2"), "more 'weight' lines than numweights 2", 25);
+    requireMeshError(replaced(kMesh, "numweights 3", "numweights 4"), "expected 'weight' line 3 of numweights 4", 26);
 }
 
 TEST_CASE("md5mesh: lexical damage is an error, not a crash", "[md5][mesh][errors]") {
     // A truncated file usually fails the room check of the count before the cut...
-    requireMeshError(kMesh.substr(0, kMesh.find("( 1 -2 3.5")), "numweights 3 is more than the file can hold",
-                     22);
+    requireMeshError(kMesh.substr(0, kMesh.find("( 1 -2 3.5")), "numweights 3 is more than the file can hold", 22);
     // ...and otherwise where the text stops.
-    requireMeshError(kMesh.substr(0, kMesh.find(" .5 )")),
-                     "expected a number for the weight offset, found end", 25);
-    requireMeshError(replaced(kMesh, "\"made by hand\"", "\"made by hand"), "newline inside a quoted string",
-                     2);
+    requireMeshError(kMesh.substr(0, kMesh.find(" .5 )")), "expected a number for the weight offset, found end", 25);
+    requireMeshError(replaced(kMesh, "\"made by hand\"", "\"made by hand"), "newline inside a quoted string", 2);
     requireMeshError(replaced(kMesh, "( 0.5 -0.25 )", std::string("( 0.5 \0 )", 9)), "NUL byte", 18);
     requireMeshError(replaced(kMesh, "-1e2", "1.#INF"), "special float", 25);
 
@@ -325,8 +314,7 @@ TEST_CASE("md5anim: values are kept as written", "[md5][anim]") {
 
     REQUIRE(anim->hierarchy.size() == 3);
     CHECK(anim->hierarchy[0] == decl::Md5HierarchyEntry{"origin", -1, 0, 0});
-    CHECK(anim->hierarchy[1] ==
-          decl::Md5HierarchyEntry{"Body", 0, decl::kMd5Tx | decl::kMd5Ty | decl::kMd5Tz, 0});
+    CHECK(anim->hierarchy[1] == decl::Md5HierarchyEntry{"Body", 0, decl::kMd5Tx | decl::kMd5Ty | decl::kMd5Tz, 0});
     CHECK(anim->hierarchy[2] == decl::Md5HierarchyEntry{"Head", 1, decl::kMd5Qz, 3});
 
     REQUIRE(anim->bounds.size() == 2);
@@ -342,8 +330,7 @@ TEST_CASE("md5anim: values are kept as written", "[md5][anim]") {
 
 TEST_CASE("md5anim: the root translation is kept, not zeroed", "[md5][anim]") {
     text::Diagnostics diags;
-    const auto anim =
-        decl::parseMd5Anim(replaced(kAnim, "( 0 0 0 ) ( 0 0 0 )", "( 5 6 7 ) ( 0 0 0 )"), "t", diags);
+    const auto anim = decl::parseMd5Anim(replaced(kAnim, "( 0 0 0 ) ( 0 0 0 )", "( 5 6 7 ) ( 0 0 0 )"), "t", diags);
     REQUIRE(anim);
     CHECK(anim->baseframe[0].position == Vec3{5, 6, 7});
 }
@@ -389,8 +376,8 @@ TEST_CASE("md5anim: header errors", "[md5][anim][errors]") {
     requireAnimError(replaced(kAnim, "frameRate 24", "frameRate 24.5"), "frameRate", 6);
     requireAnimError(replaced(kAnim, "numAnimatedComponents 4", "numAnimatedComponents 19"),
                      "numAnimatedComponents 19 is more than 6 per joint (at most 18", 7);
-    requireAnimError(replaced(kAnim, "numAnimatedComponents 4", "numAnimatedComponents -4"),
-                     "numAnimatedComponents", 7);
+    requireAnimError(replaced(kAnim, "numAnimatedComponents 4", "numAnimatedComponents -4"), "numAnimatedComponents",
+                     7);
     requireAnimError(replaced(kAnim, "frameRate 24", "framerate 24"), "expected 'frameRate'", 6);
     requireAnimError(replaced(kAnim, "bounds {", "bbox {"), "expected 'bounds'", 15);
 }
@@ -403,34 +390,26 @@ TEST_CASE("md5anim: counts larger than the input are rejected before allocating"
     // Ten frames would fit without values, but not with 18 values each.
     requireAnimError(replaced(replaced(kAnim, "numFrames 2", "numFrames 10"), "numAnimatedComponents 4",
                               "numAnimatedComponents 18"),
-                     "numFrames 10 with numAnimatedComponents 18 values each is more than the file can hold",
-                     4);
+                     "numFrames 10 with numAnimatedComponents 18 values each is more than the file can hold", 4);
 }
 
 TEST_CASE("md5anim: hierarchy errors", "[md5][anim][errors]") {
-    requireAnimError(replaced(kAnim, "\"origin\" -1 0 0", "\"origin\" 0 0 0"),
-                     "the first joint must be the root", 10);
+    requireAnimError(replaced(kAnim, "\"origin\" -1 0 0", "\"origin\" 0 0 0"), "the first joint must be the root", 10);
     requireAnimError(replaced(kAnim, "\"Body\" 0 7 0", "\"Body\" -1 7 0"), "only joint 0 may be a root", 11);
-    requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 2 32 3"), "parents must precede children",
-                     12);
-    requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 1 64 3"),
-                     "has flags 64, out of range 0..63", 12);
+    requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 2 32 3"), "parents must precede children", 12);
+    requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 1 64 3"), "has flags 64, out of range 0..63", 12);
     requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 1 -1 3"), "has flags -1", 12);
     requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 1 32 4"),
                      "reads 1 components from start index 4, past numAnimatedComponents 4", 12);
-    requireAnimError(replaced(kAnim, "\"Body\" 0 7 0", "\"Body\" 0 7 2"),
-                     "reads 3 components from start index 2", 11);
+    requireAnimError(replaced(kAnim, "\"Body\" 0 7 0", "\"Body\" 0 7 2"), "reads 3 components from start index 2", 11);
     requireAnimError(replaced(kAnim, "\"Head\" 1 32 3", "\"Head\" 1 32 -1"), "start index -1", 12);
-    requireAnimError(replaced(kAnim, "numJoints 3", "numJoints 4"), "the hierarchy block ends after 3 lines",
-                     13);
+    requireAnimError(replaced(kAnim, "numJoints 3", "numJoints 4"), "the hierarchy block ends after 3 lines", 13);
     requireAnimError(replaced(kAnim, "numJoints 3", "numJoints 2"), "more lines than numJoints", 12);
 }
 
 TEST_CASE("md5anim: bounds, baseframe and frame errors", "[md5][anim][errors]") {
-    requireAnimError(replaced(kAnim, "numFrames 2", "numFrames 3"), "the bounds block ends after 2 lines",
-                     18);
-    requireAnimError(replaced(kAnim, "\t( 1 0 0 ) ( 0 0 0.25 )\n", ""),
-                     "the baseframe block ends after 2 lines", 23);
+    requireAnimError(replaced(kAnim, "numFrames 2", "numFrames 3"), "the bounds block ends after 2 lines", 18);
+    requireAnimError(replaced(kAnim, "\t( 1 0 0 ) ( 0 0 0.25 )\n", ""), "the baseframe block ends after 2 lines", 23);
     requireAnimError(replaced(kAnim, "( 0 0 40 ) ( -0.5 -0.5 -0.5 )", "( 0 0 40 ) -0.5 -0.5 -0.5"),
                      "baseframe orientation", 22);
     requireAnimError(replaced(kAnim, "frame 1 {", "frame 2 {"), "frame index 2 should be 1", 30);
@@ -440,12 +419,10 @@ TEST_CASE("md5anim: bounds, baseframe and frame errors", "[md5][anim][errors]") 
                      "frame 1 has 3 values, but numAnimatedComponents is 4", 32);
     requireAnimError(replaced(kAnim, "1 -2 40.5 -0.125", "1 -2 40.5 -0.125 7"),
                      "frame 1 has more values than numAnimatedComponents 4", 31);
-    requireAnimError(replaced(kAnim, "1 -2 40.5 -0.125", "1 -2 40.5 -0.125 -7"), "frame 1 has more values",
-                     31);
+    requireAnimError(replaced(kAnim, "1 -2 40.5 -0.125", "1 -2 40.5 -0.125 -7"), "frame 1 has more values", 31);
     requireAnimError(kAnim + "frame 2 { 0 0 0 0 }\n", "more frames than numFrames 2", 33);
     requireAnimError(kAnim + "}\n", "unexpected '}' after the last frame", 33);
-    requireAnimError(kAnim.substr(0, kAnim.find("frame 1")),
-                     "the file ends after 1 frames, but numFrames is 2", 30);
+    requireAnimError(kAnim.substr(0, kAnim.find("frame 1")), "the file ends after 1 frames, but numFrames is 2", 30);
 }
 
 TEST_CASE("md5anim: every prefix is rejected without a crash", "[md5][anim][errors]") {
@@ -490,9 +467,9 @@ joints {
     REQUIRE(parentMismatch);
     CHECK(parentMismatch->find("has parent 1 in the anim but 0 in the mesh") != std::string::npos);
 
-    const auto shorter = decl::parseMd5Mesh(
-        replaced(replaced(mesh3, "numJoints 3", "numJoints 2"), "\t\"Head\" 1 ( 0 0 0 ) ( 0 0 0 )\n", ""),
-        "m", diags);
+    const auto shorter = decl::parseMd5Mesh(replaced(replaced(mesh3, "numJoints 3", "numJoints 2"),
+                                                     "\t\"Head\" 1 ( 0 0 0 ) ( 0 0 0 )\n", ""),
+                                            "m", diags);
     REQUIRE(shorter);
     const auto countMismatch = decl::hierarchyMismatch(*anim, *shorter);
     REQUIRE(countMismatch);

@@ -1,17 +1,18 @@
 // Unit tests of the md5mesh and md5anim writers: write → parse gives back every value, the text has the
 // exporters' layout, and the bundled content is the writers' canonical text.
-#include "TestSupport.h"
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
-#include "afb/text/Files.h"
-
 #include <catch2/catch.hpp>
+
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "TestSupport.h"
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/text/Files.h"
 
 using namespace afb;
 using decl::Vec3;
@@ -172,14 +173,13 @@ TEST_CASE("md5 writers: the exporters' layout, numbers in short fixed-point form
     anim.bounds = {{{-1, -1, -1}, {1, 1, 1}}};
     anim.baseframe = {{{0, 0, 0}, {0, 0, 0}}, {{0, 0, 38}, {0, 0, 0}}, {{0, 1, 0}, {0, 0, 0}}};
     anim.frames = {{37.5, 0.25, -0.125, 0.000001}};
-    CHECK(decl::writeMd5Anim(anim) ==
-          "MD5Version 10\ncommandline \"a\"\n\n"
-          "numFrames 1\nnumJoints 3\nframeRate 24\nnumAnimatedComponents 4\n\n"
-          "hierarchy {\n\t\"origin\"\t-1 0 0\n\t\"b\"\t0 28 0\n\t\"c\"\t1 32 3\n}\n\n"
-          "bounds {\n\t( -1 -1 -1 ) ( 1 1 1 )\n}\n\n"
-          "baseframe {\n\t( 0 0 0 ) ( 0 0 0 )\n\t( 0 0 38 ) ( 0 0 0 )\n"
-          "\t( 0 1 0 ) ( 0 0 0 )\n}\n\n"
-          "frame 0 {\n\t37.5 0.25 -0.125\n\t0.000001\n}\n");
+    CHECK(decl::writeMd5Anim(anim) == "MD5Version 10\ncommandline \"a\"\n\n"
+                                      "numFrames 1\nnumJoints 3\nframeRate 24\nnumAnimatedComponents 4\n\n"
+                                      "hierarchy {\n\t\"origin\"\t-1 0 0\n\t\"b\"\t0 28 0\n\t\"c\"\t1 32 3\n}\n\n"
+                                      "bounds {\n\t( -1 -1 -1 ) ( 1 1 1 )\n}\n\n"
+                                      "baseframe {\n\t( 0 0 0 ) ( 0 0 0 )\n\t( 0 0 38 ) ( 0 0 0 )\n"
+                                      "\t( 0 1 0 ) ( 0 0 0 )\n}\n\n"
+                                      "frame 0 {\n\t37.5 0.25 -0.125\n\t0.000001\n}\n");
 }
 
 TEST_CASE("md5 writers: a value rounded to d decimals prints with at most d decimals", "[md5][writer]") {
@@ -240,8 +240,7 @@ TEST_CASE("md5 writers: every bundled file reads back equal after writing", "[md
     CHECK(files >= 11);
 }
 
-TEST_CASE("md5 writers: the generated bundled files are the writers' canonical text",
-          "[md5][writer][content]") {
+TEST_CASE("md5 writers: the generated bundled files are the writers' canonical text", "[md5][writer][content]") {
     // afb_gen_content writes its md5 files with these writers, so writing what they hold reproduces them.
     // (The chain is authored by hand and only has to read back equal, above.)
     const char* const generated[] = {
@@ -254,9 +253,8 @@ TEST_CASE("md5 writers: the generated bundled files are the writers' canonical t
     for (const char* rel : generated) {
         INFO(rel);
         const std::string text = readText(test::sourceDir() / rel);
-        const std::string rewritten = std::string(rel).ends_with(".md5mesh")
-                                          ? decl::writeMd5Mesh(parseMesh(text))
-                                          : decl::writeMd5Anim(parseAnim(text));
+        const std::string rewritten = std::string(rel).ends_with(".md5mesh") ? decl::writeMd5Mesh(parseMesh(text))
+                                                                             : decl::writeMd5Anim(parseAnim(text));
         CHECK(rewritten == text);
     }
 }

@@ -1,22 +1,24 @@
 // figure::buildFigure against the spec (af-format §0, §1.2, §1.7, §1.8, §2.2–§2.4, §3.1–§3.4, §4.1–§4.7, §5.3,
 // §6.2, §8) and the findings the issue asks for. Expected values are worked out by hand from the spec, not from
 // the code under test; figures are built from inline `.af` text on hand-made skeletons (identity orientations).
-#include "FigureFixture.h"
-#include "afb/decl/AfParser.h"
-#include "afb/figure/Collision.h"
-#include "afb/figure/Figure.h"
-#include "afb/figure/Skeleton.h"
+#include <catch2/catch.hpp>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
-#include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <Eigen/Geometry>
+
+#include "FigureFixture.h"
+#include "afb/decl/AfParser.h"
+#include "afb/figure/Collision.h"
+#include "afb/figure/Figure.h"
+#include "afb/figure/Skeleton.h"
 
 using namespace afb;
 using Eigen::Matrix3d;
@@ -107,8 +109,7 @@ decl::AfDecl parseDecl(const std::string& af) {
 
 figure::Skeleton skeletonOf(const std::vector<TestJoint>& joints) {
     text::Diagnostics d;
-    auto skeleton =
-        figure::Skeleton::build(test::md5Mesh(joints), test::md5Anim(joints), Vector3d::Zero(), d, "test");
+    auto skeleton = figure::Skeleton::build(test::md5Mesh(joints), test::md5Anim(joints), Vector3d::Zero(), d, "test");
     INFO(d.str());
     REQUIRE(skeleton);
     return *skeleton;
@@ -152,8 +153,8 @@ bool isRotation(const Matrix3d& r) {
 // Model-space frame of a constraint as attached to body1 and to body2 (model space itself for the world).
 std::pair<Transform, Transform> framesModel(const Figure& f, const FigureConstraint& c) {
     const Transform a = f.bodies[static_cast<std::size_t>(c.body1)].loadPose * c.frameInBody1;
-    const Transform b = c.body2 >= 0 ? f.bodies[static_cast<std::size_t>(c.body2)].loadPose * c.frameInBody2
-                                     : c.frameInBody2;
+    const Transform b =
+        c.body2 >= 0 ? f.bodies[static_cast<std::size_t>(c.body2)].loadPose * c.frameInBody2 : c.frameInBody2;
     return {a, b};
 }
 
@@ -364,10 +365,10 @@ TEST_CASE("figure: angles follow R = Rz(yaw)·Ry(pitch)·Rx(roll) (§0)", "[figu
     CHECK(near(Vector3d(b.body("pelvis").loadPose.rotation.col(1)), Vector3d(0, 0, 1), kTight));
     const double p = 30 * kDeg;
     CHECK(near(Vector3d(b.body("pitch").loadPose.rotation.col(0)), Vector3d(std::cos(p), 0, -std::sin(p)), kTight));
-    const Matrix3d expected = (Eigen::AngleAxisd(40 * kDeg, Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(30 * kDeg, Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(50 * kDeg, Vector3d::UnitX()))
-                                  .toRotationMatrix();
+    const Matrix3d expected =
+        (Eigen::AngleAxisd(40 * kDeg, Vector3d::UnitZ()) * Eigen::AngleAxisd(30 * kDeg, Vector3d::UnitY()) *
+         Eigen::AngleAxisd(50 * kDeg, Vector3d::UnitX()))
+            .toRotationMatrix();
     CHECK(near(b.body("all").loadPose.rotation, expected, kTight));
     // §1.2: a leading '-' is ignored for angles.
     CHECK(near(b.body("neg").loadPose.rotation, expected, kTight));
@@ -495,7 +496,8 @@ TEST_CASE("figure: inertiaScale is a matrix product (§3.3)", "[figure]") {
         const FigureBody& s = scaled.body("pelvis");
         // The moments are about the body frame axes: compare the tensors in model space.
         auto tensor = [](const FigureBody& body) {
-            return Matrix3d(body.loadPose.rotation * body.inertiaKgM2.asDiagonal() * body.loadPose.rotation.transpose());
+            return Matrix3d(body.loadPose.rotation * body.inertiaKgM2.asDiagonal() *
+                            body.loadPose.rotation.transpose());
         };
         const Matrix3d base = Vector3d(p.inertiaKgM2).asDiagonal();
         const Matrix3d expectedLocal = base * Vector3d(2, 1, 1).asDiagonal();
@@ -840,8 +842,7 @@ TEST_CASE("figure: hinge range φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2] (§
     CHECK(std::holds_alternative<std::monostate>(b.constraint("free").limit));
 }
 
-TEST_CASE("figure: body2 typo attaches to the world with a warning; body1 unknown is an error (§1.7)",
-          "[figure]") {
+TEST_CASE("figure: body2 typo attaches to the world with a warning; body1 unknown is an error (§1.7)", "[figure]") {
     SECTION("body2") {
         const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
 	hinge "h" {
@@ -1054,8 +1055,7 @@ TEST_CASE("figure findings: joints contained by no body or by two (§5.3)", "[fi
     CHECK(b.body("pelvis").containedJoints == std::vector<int>{0, 1});
 }
 
-TEST_CASE("figure: an omitted containedJoints means \"*origin\"; the later body wins (§5.3, §8 item 4)",
-          "[figure]") {
+TEST_CASE("figure: an omitted containedJoints means \"*origin\"; the later body wins (§5.3, §8 item 4)", "[figure]") {
     const Built b = build(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model box( ( -6, -8, -4 ), ( 6, 8, 4 ) ) origin joint( "Hips" ) containedJoints "*Hips" }
 	body "chest" { joint "Spine" model box( ( -5, -7, 0 ), ( 5, 7, 16 ) ) origin joint( "Spine" ) }
@@ -1094,8 +1094,7 @@ TEST_CASE("figure findings: names that differ only in case are errors (§1.8, §
     }
 }
 
-TEST_CASE("figure findings: mass outside [1, 100], mass ratio above 10:1, inertia more than 10:1 apart",
-          "[figure]") {
+TEST_CASE("figure findings: mass outside [1, 100], mass ratio above 10:1, inertia more than 10:1 apart", "[figure]") {
     const Built b = build(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model box( ( -5, -5, -5 ), ( 5, 5, 5 ) ) origin ( 0, 0, 40 ) density 0.05 }
 	body "light" { joint "Spine" model box( ( -1, -1, -1 ), ( 1, 1, 1 ) ) origin ( 0, 0, 60 ) density 0.1 }
@@ -1149,7 +1148,8 @@ TEST_CASE("figure findings: limits the load pose already exceeds (§4.3, §4.5)"
     INFO(b.findings.str());
     REQUIRE(b.figure);
     CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"coneIn\"", "starts"));
-    CHECK(b.hasWarning("ballAndSocketJoint \"coneOut\"", "starts 45 deg from the cone axis, outside the half-angle 30"));
+    CHECK(
+        b.hasWarning("ballAndSocketJoint \"coneOut\"", "starts 45 deg from the cone axis, outside the half-angle 30"));
     CHECK_FALSE(b.hasWarning("ballAndSocketJoint \"pyrIn\"", "starts"));
     CHECK(b.hasWarning("ballAndSocketJoint \"pyrOut\"", "deg from its axis; limits 30, 20 deg"));
     CHECK_FALSE(b.hasWarning("hinge \"hingeIn\"", "excludes"));
@@ -1191,7 +1191,8 @@ TEST_CASE("figure findings: self-colliding bodies that overlap or touch at the l
     }
     {
         // Joined by a collision-disabling constraint: not a self-colliding pair, nothing to report.
-        const Built b = build(figureWith("48", "\tballAndSocketJoint \"j\" { body1 \"chest\" body2 \"pelvis\" anchor ( 0, 0, 44 ) }\n"));
+        const Built b = build(
+            figureWith("48", "\tballAndSocketJoint \"j\" { body1 \"chest\" body2 \"pelvis\" anchor ( 0, 0, 44 ) }\n"));
         INFO(b.findings.str());
         REQUIRE(b.figure);
         CHECK_FALSE(flagged(b));

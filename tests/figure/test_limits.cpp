@@ -1,11 +1,13 @@
 // Limit excess (figure/Limits.h) against closed forms: cone angles, pyramid edges and corners (af-format
 // §4.3), hinge ranges centred, off-centre and across ±180° (§4.5), and invariance under a common rotation.
-#include "afb/figure/Limits.h"
-
-#include <Eigen/Geometry>
 #include <catch2/catch.hpp>
+
 #include <cmath>
 #include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "afb/figure/Limits.h"
 
 using afb::figure::ConeLimit;
 using afb::figure::FigureConstraint;
@@ -22,9 +24,7 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kMargin = 1e-12;
 
-Matrix3d about(const Vector3d& axis, double deg) {
-    return AngleAxisd(deg * kDeg, axis.normalized()).matrix();
-}
+Matrix3d about(const Vector3d& axis, double deg) { return AngleAxisd(deg * kDeg, axis.normalized()).matrix(); }
 
 FigureConstraint coneConstraint(double halfDeg) {
     FigureConstraint c;
@@ -61,8 +61,7 @@ Matrix3d shaftAt(double aDeg, double bDeg) {
     return Eigen::Quaterniond::FromTwoVectors(Vector3d::UnitX(), s).toRotationMatrix();
 }
 
-double excessDeg(const FigureConstraint& c, const Matrix3d& body1,
-                 const Matrix3d& body2 = Matrix3d::Identity()) {
+double excessDeg(const FigureConstraint& c, const Matrix3d& body1, const Matrix3d& body2 = Matrix3d::Identity()) {
     return limitExcessRad(c, body1, body2) / kDeg;
 }
 
@@ -75,8 +74,7 @@ TEST_CASE("limit excess: cone = angle from the axis minus the half angle (§4.3)
     CHECK(excessDeg(c, about(Vector3d::UnitZ(), 20)) == Approx(0).margin(kMargin));
     CHECK(excessDeg(c, about(Vector3d::UnitZ(), 30)) == Approx(0).margin(1e-5));
     CHECK(excessDeg(c, about(Vector3d::UnitZ(), 50)) == Approx(20).margin(1e-9));
-    CHECK(excessDeg(c, about(Vector3d(0, 1, 1), -75)) ==
-          Approx(45).margin(1e-9)); // any direction off the axis
+    CHECK(excessDeg(c, about(Vector3d(0, 1, 1), -75)) == Approx(45).margin(1e-9));  // any direction off the axis
     CHECK(excessDeg(c, about(Vector3d::UnitY(), 180)) == Approx(150).margin(1e-5)); // anti-parallel
     CHECK(afb::figure::coneAngleRad(cone, about(Vector3d::UnitZ(), 50), Matrix3d::Identity()) / kDeg ==
           Approx(50).margin(1e-9));
@@ -87,13 +85,11 @@ TEST_CASE("limit excess: cone = angle from the axis minus the half angle (§4.3)
     CHECK(excessDeg(c, about(Vector3d::UnitX(), 120)) == Approx(0).margin(1e-5));
 }
 
-TEST_CASE("limit excess: pyramid = the larger planar-angle excess, edges and corners (§4.3)",
-          "[figure][limits]") {
+TEST_CASE("limit excess: pyramid = the larger planar-angle excess, edges and corners (§4.3)", "[figure][limits]") {
     const FigureConstraint c = pyramidConstraint(30, 20); // ±30° towards ±l, ±20° towards ±u
     const auto& p = std::get<PyramidLimit>(c.limit);
 
-    const Eigen::Vector2d angles =
-        afb::figure::pyramidPlanarAnglesRad(p, shaftAt(40, -25), Matrix3d::Identity());
+    const Eigen::Vector2d angles = afb::figure::pyramidPlanarAnglesRad(p, shaftAt(40, -25), Matrix3d::Identity());
     CHECK(angles.x() / kDeg == Approx(40).margin(1e-9));
     CHECK(angles.y() / kDeg == Approx(-25).margin(1e-9));
 
@@ -130,8 +126,7 @@ TEST_CASE("limit excess: hinge ranges, off-centre and across ±180° (§4.5)", "
         CHECK(excessDeg(c, about(z, 30)) == Approx(15).margin(1e-9));
         CHECK(excessDeg(c, about(z, -80)) == Approx(5).margin(1e-9));
         CHECK(excessDeg(c, about(z, -70)) == Approx(0).margin(kMargin));
-        CHECK(afb::figure::hingeAngleRad(c, about(z, -70), Matrix3d::Identity()) / kDeg ==
-              Approx(-70).margin(1e-9));
+        CHECK(afb::figure::hingeAngleRad(c, about(z, -70), Matrix3d::Identity()) / kDeg == Approx(-70).margin(1e-9));
     }
     SECTION("a range that excludes the load pose") {
         const FigureConstraint c = hingeConstraint(20, 80);
@@ -149,22 +144,18 @@ TEST_CASE("limit excess: hinge ranges, off-centre and across ±180° (§4.5)", "
     SECTION("φ is body1 relative to body2, right-handed about the frames' Z, whatever the axis") {
         const Vector3d axis(0.3, -1, 0.5);
         const FigureConstraint c = hingeConstraint(-10, 10, axis);
-        CHECK(afb::figure::hingeAngleRad(c, about(axis, 25), Matrix3d::Identity()) / kDeg ==
-              Approx(25).margin(1e-9));
-        CHECK(afb::figure::hingeAngleRad(c, Matrix3d::Identity(), about(axis, 25)) / kDeg ==
-              Approx(-25).margin(1e-9));
+        CHECK(afb::figure::hingeAngleRad(c, about(axis, 25), Matrix3d::Identity()) / kDeg == Approx(25).margin(1e-9));
+        CHECK(afb::figure::hingeAngleRad(c, Matrix3d::Identity(), about(axis, 25)) / kDeg == Approx(-25).margin(1e-9));
         CHECK(excessDeg(c, about(axis, 25)) == Approx(15).margin(1e-9));
         CHECK(excessDeg(c, about(axis, 179)) == Approx(169).margin(1e-9));
         CHECK(excessDeg(c, about(axis, -179)) == Approx(169).margin(1e-9));
         // A small bend off the axis (which the hinge's own rows prevent) does not read as hinge excess.
-        CHECK(excessDeg(c, Matrix3d::Identity(), about(axis.cross(Vector3d::UnitX()), 5)) ==
-              Approx(0).margin(kMargin));
+        CHECK(excessDeg(c, Matrix3d::Identity(), about(axis.cross(Vector3d::UnitX()), 5)) == Approx(0).margin(kMargin));
     }
 }
 
-TEST_CASE(
-    "limit excess: none without a limit; a common rotation (a world constraint's spawn) changes nothing",
-    "[figure][limits]") {
+TEST_CASE("limit excess: none without a limit; a common rotation (a world constraint's spawn) changes nothing",
+          "[figure][limits]") {
     FigureConstraint free;
     free.type = JointType::BallAndSocket;
     CHECK(limitExcessRad(free, about(Vector3d::UnitX(), 90), Matrix3d::Identity()) == 0.0);

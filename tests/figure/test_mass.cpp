@@ -1,11 +1,12 @@
 // Exact polyhedral mass properties against the closed forms of af-format §3.2, and the zero-volume rule.
-#include "afb/figure/MassProperties.h"
-#include "afb/figure/Polytope.h"
-
 #include <catch2/catch.hpp>
+
 #include <cmath>
 #include <numbers>
 #include <utility>
+
+#include "afb/figure/MassProperties.h"
+#include "afb/figure/Polytope.h"
 
 using afb::figure::computeClipModelMassProperties;
 using afb::figure::computeMassProperties;
@@ -26,9 +27,7 @@ struct Expected {
     Matrix3d covariance;
 };
 
-Matrix3d diagonal(double xx, double yy, double zz) {
-    return Vector3d(xx, yy, zz).asDiagonal();
-}
+Matrix3d diagonal(double xx, double yy, double zz) { return Vector3d(xx, yy, zz).asDiagonal(); }
 
 // Checks mass properties at `density` against the closed form; `length` scales the absolute margins used for
 // quantities whose expected value is 0.
@@ -158,8 +157,9 @@ TEST_CASE("mass: cylinder (inscribed n-gon prism) closed form", "[figure][mass]"
 
 TEST_CASE("mass: cone closed form, COM ¾ of the height below the apex", "[figure][mass]") {
     // Decl bounds centred in x/y (the table's case): v1, v2 as written, LoadBody's rewrite in the builder.
-    const std::vector<std::pair<Vector3d, Vector3d>> declBounds = {
-        {{-2, -3, 0}, {2, 3, 10}}, {{-1, -1, 5}, {1, 1, 6}}, {{-7, -0.5, -20}, {7, 0.5, -3}}};
+    const std::vector<std::pair<Vector3d, Vector3d>> declBounds = {{{-2, -3, 0}, {2, 3, 10}},
+                                                                   {{-1, -1, 5}, {1, 1, 6}},
+                                                                   {{-7, -0.5, -20}, {7, 0.5, -3}}};
     for (const auto& [v1, v2] : declBounds)
         for (const auto& [requested, n] : {std::pair{3, 3}, {5, 5}, {10, 10}, {15, 15}, {16, 15}}) {
             INFO("requested " << requested);
@@ -193,8 +193,8 @@ TEST_CASE("mass: off-centre cone is sheared toward the apex at x = y = 0", "[fig
             -cy * zz / height, //
             -cx * zz / height, -cy * zz / height, zz;
         checkAgainst(build.polytope,
-                     {n / 6.0 * std::sin(angle) * hx * hy * height,
-                      Vector3d(0.75 * cx, 0.75 * cy, -0.75 * height), covariance},
+                     {n / 6.0 * std::sin(angle) * hx * hy * height, Vector3d(0.75 * cx, 0.75 * cy, -0.75 * height),
+                      covariance},
                      1.0, (v2 - v1).norm());
     }
 }
@@ -203,10 +203,9 @@ TEST_CASE("mass: bone closed form, COM at the body origin", "[figure][mass]") {
     for (const auto& [length, width] : {std::pair{10.0, 2.0}, std::pair{3.0, 5.0}, std::pair{0.7, 0.1}})
         for (double density : kDensities) {
             const double w2 = width * width;
-            checkAgainst(
-                afb::figure::makeBone(length, width),
-                {w2 * length / 8, Vector3d::Zero(), diagonal(w2 / 40, 3 * w2 / 160, length * length / 40)},
-                density, length + width);
+            checkAgainst(afb::figure::makeBone(length, width),
+                         {w2 * length / 8, Vector3d::Zero(), diagonal(w2 / 40, 3 * w2 / 160, length * length / 40)},
+                         density, length + width);
             checkDiagonal(afb::figure::makeBone(length, width));
         }
 }
@@ -235,8 +234,7 @@ TEST_CASE("mass: inverted bounds give negative volume and mass, as in the engine
     const MassProperties mp = computeMassProperties(afb::figure::makeBox({1, 0, 0}, {0, 2, 3}), 1.0);
     CHECK(mp.volume == Approx(-6.0).epsilon(kRel));
     CHECK(mp.mass < 0);
-    CHECK_FALSE(
-        computeClipModelMassProperties(afb::figure::makeBox({1, 0, 0}, {0, 2, 3}), 1.0).zeroVolumeFallback);
+    CHECK_FALSE(computeClipModelMassProperties(afb::figure::makeBox({1, 0, 0}, {0, 2, 3}), 1.0).zeroVolumeFallback);
 }
 
 TEST_CASE("mass: zero-volume rule (idClipModel cache)", "[figure][mass]") {

@@ -1,13 +1,14 @@
 // Trace-model shape construction (af-format §3.1): vertex layouts, counts, side clamps, orientation, the bone
 // frame.
-#include "afb/figure/Polytope.h"
-
 #include <catch2/catch.hpp>
+
 #include <climits>
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <utility>
+
+#include "afb/figure/Polytope.h"
 
 using afb::figure::Polytope;
 using Eigen::Vector3d;
@@ -149,16 +150,15 @@ TEST_CASE("dodecahedron: 20/30/12, planar pentagons, ±c vertices touch the boun
 TEST_CASE("side clamps follow the engine's order", "[figure][shapes]") {
     using afb::figure::effectiveConeSides;
     using afb::figure::effectiveCylinderSides;
-    const std::vector<std::pair<int, int>> cylinder = {
-        {INT_MIN, 3}, {-5, 3},  {0, 3},   {1, 3},   {2, 3},    {3, 3},       {7, 7},
-        {10, 10},     {11, 10}, {12, 10}, {16, 10}, {100, 10}, {INT_MAX, 10}};
+    const std::vector<std::pair<int, int>> cylinder = {{INT_MIN, 3}, {-5, 3},   {0, 3},       {1, 3},   {2, 3},
+                                                       {3, 3},       {7, 7},    {10, 10},     {11, 10}, {12, 10},
+                                                       {16, 10},     {100, 10}, {INT_MAX, 10}};
     for (const auto& [requested, effective] : cylinder) {
         INFO("cylinder " << requested);
         CHECK(effectiveCylinderSides(requested) == effective);
     }
-    const std::vector<std::pair<int, int>> cone = {{INT_MIN, 3}, {-1, 3},  {0, 3},   {1, 3},
-                                                   {2, 2},       {3, 3},   {14, 14}, {15, 15},
-                                                   {16, 15},     {31, 15}, {32, 15}, {INT_MAX, 15}};
+    const std::vector<std::pair<int, int>> cone = {{INT_MIN, 3}, {-1, 3},  {0, 3},   {1, 3},   {2, 2},   {3, 3},
+                                                   {14, 14},     {15, 15}, {16, 15}, {31, 15}, {32, 15}, {INT_MAX, 15}};
     for (const auto& [requested, effective] : cone) {
         INFO("cone " << requested);
         CHECK(effectiveConeSides(requested) == effective);
@@ -251,8 +251,7 @@ TEST_CASE("cone: clamps, and the accepted 2-sided cone", "[figure][shapes]") {
     }
 }
 
-TEST_CASE("bone: two triangular pyramids on an isosceles equator, centred on the origin",
-          "[figure][shapes]") {
+TEST_CASE("bone: two triangular pyramids on an isosceles equator, centred on the origin", "[figure][shapes]") {
     for (const auto& [length, width] : {std::pair{10.0, 2.0}, std::pair{3.0, 5.0}, std::pair{0.7, 0.1}}) {
         const Polytope bone = afb::figure::makeBone(length, width);
         checkCounts(bone, {5, 9, 6});

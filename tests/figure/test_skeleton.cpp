@@ -1,12 +1,8 @@
 // figure::Skeleton and the md5 pose functions (af-format §0, §2.1, §2.4, §5.1, §5.3, §7.3, §7.4, §8 items 19,
 // 21, 22). Expected values are worked out by hand from the spec, not from the code under test.
-#include "TestSupport.h"
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
-#include "afb/figure/Skeleton.h"
+#include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -15,6 +11,11 @@
 #include <string>
 #include <type_traits>
 #include <vector>
+
+#include "TestSupport.h"
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/figure/Skeleton.h"
 
 using namespace afb;
 using Eigen::Matrix3d;
@@ -38,17 +39,15 @@ decl::Md5Mesh mesh(const std::string& joints, int numJoints) {
 }
 
 // `hierarchy` and `baseframe` hold one line per joint; `frames` one brace body per frame.
-decl::Md5Anim anim(const std::string& hierarchy, const std::string& baseframe,
-                   const std::vector<std::string>& frames, int numJoints, int numComponents,
-                   int frameRate = 24) {
-    std::string src = "MD5Version 10\ncommandline \"\"\nnumFrames " + std::to_string(frames.size()) +
-                      "\nnumJoints " + std::to_string(numJoints) + "\nframeRate " +
-                      std::to_string(frameRate) + "\nnumAnimatedComponents " + std::to_string(numComponents) +
-                      "\nhierarchy {\n" + hierarchy + "}\nbounds {\n";
+decl::Md5Anim anim(const std::string& hierarchy, const std::string& baseframe, const std::vector<std::string>& frames,
+                   int numJoints, int numComponents, int frameRate = 24) {
+    std::string src = "MD5Version 10\ncommandline \"\"\nnumFrames " + std::to_string(frames.size()) + "\nnumJoints " +
+                      std::to_string(numJoints) + "\nframeRate " + std::to_string(frameRate) +
+                      "\nnumAnimatedComponents " + std::to_string(numComponents) + "\nhierarchy {\n" + hierarchy +
+                      "}\nbounds {\n";
     for (std::size_t k = 0; k < frames.size(); ++k) src += "( 0 0 0 ) ( 0 0 0 )\n";
     src += "}\nbaseframe {\n" + baseframe + "}\n";
-    for (std::size_t k = 0; k < frames.size(); ++k)
-        src += "frame " + std::to_string(k) + " {\n" + frames[k] + "\n}\n";
+    for (std::size_t k = 0; k < frames.size(); ++k) src += "frame " + std::to_string(k) + " {\n" + frames[k] + "\n}\n";
     text::Diagnostics d;
     auto a = decl::parseMd5Anim(src, "test.md5anim", d);
     INFO(d.str());
@@ -66,8 +65,7 @@ const std::string kJoints = "\"origin\" -1 ( 0 0 0 ) ( 0 0 0 )\n"
                             "\"Spine\" 1 ( 0 5 10 ) ( 0 0 -0.70710678118654752 )\n"
                             "\"Head\" 2 ( 0 7 10 ) ( -0.5 -0.5 -0.5 )\n"
                             "\"HIPS\" 0 ( 3 0 0 ) ( 0 0 0 )\n";
-const std::string kHierarchy =
-    "\"origin\" -1 0 0\n\"Hips\" 0 0 0\n\"Spine\" 1 0 0\n\"Head\" 2 0 0\n\"HIPS\" 0 0 0\n";
+const std::string kHierarchy = "\"origin\" -1 0 0\n\"Hips\" 0 0 0\n\"Spine\" 1 0 0\n\"Head\" 2 0 0\n\"HIPS\" 0 0 0\n";
 // The same pose, parent-relative: Spine is 5 along Hips' X, Head 2 along Spine's X.
 const std::string kBaseframe = "( 0 0 0 ) ( 0 0 0 )\n"
                                "( 0 0 10 ) ( 0 0 -0.70710678118654752 )\n"
@@ -85,29 +83,21 @@ Skeleton build(const decl::Md5Mesh& m, const decl::Md5Anim& a, const Vector3d& o
     return *s;
 }
 
-bool near(const Vector3d& a, const Vector3d& b, double tol) {
-    return (a - b).cwiseAbs().maxCoeff() <= tol;
-}
-bool near(const Matrix3d& a, const Matrix3d& b, double tol) {
-    return (a - b).cwiseAbs().maxCoeff() <= tol;
-}
+bool near(const Vector3d& a, const Vector3d& b, double tol) { return (a - b).cwiseAbs().maxCoeff() <= tol; }
+bool near(const Matrix3d& a, const Matrix3d& b, double tol) { return (a - b).cwiseAbs().maxCoeff() <= tol; }
 bool near(const Transform& a, const Transform& b, double tol) {
     return near(a.rotation, b.rotation, tol) && near(a.position, b.position, tol);
 }
-Matrix3d rotZ(double deg) {
-    return Eigen::AngleAxisd(deg * kPi / 180, Vector3d::UnitZ()).toRotationMatrix();
-}
+Matrix3d rotZ(double deg) { return Eigen::AngleAxisd(deg * kPi / 180, Vector3d::UnitZ()).toRotationMatrix(); }
 
 bool isRotation(const Matrix3d& r, double tol) {
-    return near(Matrix3d(r.transpose() * r), Matrix3d::Identity(), tol) &&
-           std::abs(r.determinant() - 1) <= tol;
+    return near(Matrix3d(r.transpose() * r), Matrix3d::Identity(), tol) && std::abs(r.determinant() - 1) <= tol;
 }
 
 std::size_t countContaining(const text::Diagnostics& d, text::Severity severity, const std::string& needle) {
-    return static_cast<std::size_t>(
-        std::count_if(d.items().begin(), d.items().end(), [&](const text::Diagnostic& x) {
-            return x.severity == severity && x.message.find(needle) != std::string::npos;
-        }));
+    return static_cast<std::size_t>(std::count_if(d.items().begin(), d.items().end(), [&](const text::Diagnostic& x) {
+        return x.severity == severity && x.message.find(needle) != std::string::npos;
+    }));
 }
 
 } // namespace
@@ -137,8 +127,7 @@ TEST_CASE("a baseframe equal to the bind pose gives load pose == bind pose", "[f
     const Skeleton s = build(mesh(kJoints, 5), anim(kHierarchy, kBaseframe, {""}, 5, 0));
     for (int i = 0; i < s.jointCount(); ++i) {
         INFO("joint " << i);
-        CHECK(
-            near(s.loadPose()[static_cast<std::size_t>(i)], s.bindPose()[static_cast<std::size_t>(i)], 1e-9));
+        CHECK(near(s.loadPose()[static_cast<std::size_t>(i)], s.bindPose()[static_cast<std::size_t>(i)], 1e-9));
     }
     // Hand FK of the anim: Spine = Hips + Rz(90°)·(5,0,0) = (0,5,10); Head = Spine + Rz(90°)·(2,0,0) =
     // (0,7,10).
@@ -240,8 +229,8 @@ TEST_CASE("root translation: zeroed by the loader, then the model offset", "[fig
 
 TEST_CASE("joint lookup, first child and descendants", "[figure][skeleton]") {
     text::Diagnostics d;
-    const auto s = Skeleton::build(mesh(kJoints, 5), anim(kHierarchy, kBaseframe, {""}, 5, 0),
-                                   Vector3d::Zero(), d, "dup.def");
+    const auto s =
+        Skeleton::build(mesh(kJoints, 5), anim(kHierarchy, kBaseframe, {""}, 5, 0), Vector3d::Zero(), d, "dup.def");
     REQUIRE(s);
     // Case-insensitive, first match wins: "HIPS" (joint 4) is shadowed by "Hips" (af-format §8 item 22).
     CHECK(s->findJoint("hips") == 1);
@@ -313,16 +302,15 @@ TEST_CASE("build reports errors instead of asserting", "[figure][skeleton]") {
         fails(a, "no frames");
     }
     SECTION("a hand-built anim with a short frame") {
-        const std::string h =
-            "\"origin\" -1 0 0\n\"Hips\" 0 32 0\n\"Spine\" 1 0 0\n\"Head\" 2 0 0\n\"HIPS\" 0 0 0\n";
+        const std::string h = "\"origin\" -1 0 0\n\"Hips\" 0 32 0\n\"Spine\" 1 0 0\n\"Head\" 2 0 0\n\"HIPS\" 0 0 0\n";
         decl::Md5Anim a = anim(h, kBaseframe, {"0"}, 5, 1);
         a.frames[0].clear();
         fails(a, "values");
     }
     SECTION("a mesh without joints") {
         text::Diagnostics d;
-        CHECK_FALSE(Skeleton::build(decl::Md5Mesh{}, anim(kHierarchy, kBaseframe, {""}, 5, 0),
-                                    Vector3d::Zero(), d, "x"));
+        CHECK_FALSE(
+            Skeleton::build(decl::Md5Mesh{}, anim(kHierarchy, kBaseframe, {""}, 5, 0), Vector3d::Zero(), d, "x"));
         CHECK(d.hasErrors());
     }
 }
@@ -428,8 +416,8 @@ TEST_CASE("corpus: zsec skeletons build and match their exporter's bounds", "[fi
             const double loadLength = (s->loadPose()[k].position - s->loadPose()[p].position).norm();
             const double diff = std::abs(bindLength - loadLength);
             if (diff < 1e-3) ++within1e3;
-            const bool exempt = i == s->firstChild(0) || std::find(exceptions.begin(), exceptions.end(),
-                                                                   s->name(i)) != exceptions.end();
+            const bool exempt = i == s->firstChild(0) ||
+                                std::find(exceptions.begin(), exceptions.end(), s->name(i)) != exceptions.end();
             INFO(s->name(i) << " bone length differs by " << diff);
             if (!exempt) CHECK(diff < 0.05);
         }
@@ -446,10 +434,10 @@ TEST_CASE("corpus: zsec skeletons build and match their exporter's bounds", "[fi
             REQUIRE(a->numAnimatedComponents > 0);
             double worst = 0;
             for (std::size_t f = 0; f < a->frames.size(); ++f)
-                worst = std::max(worst, jointBoundsError(figure::toModelSpace(
-                                                             figure::animFrameLocal(*a, static_cast<int>(f)),
-                                                             s->parents()),
-                                                         a->bounds[f]));
+                worst = std::max(worst,
+                                 jointBoundsError(figure::toModelSpace(figure::animFrameLocal(*a, static_cast<int>(f)),
+                                                                       s->parents()),
+                                                  a->bounds[f]));
             CHECK(worst < 1e-2); // measured at most 4.2e-3 (values are written with 10 decimals)
         }
     }
@@ -480,8 +468,7 @@ TEST_CASE("corpus: Bob.md5anim frames give proper rotations", "[figure][skeleton
     const auto f10 = figure::animFrameLocal(*a, 10), f11 = figure::animFrameLocal(*a, 11);
     for (std::size_t j = 0; j < mid.size(); ++j) {
         CHECK(isRotation(mid[j].rotation, 1e-12));
-        CHECK(near(mid[j].position, Vector3d(f10[j].position + 0.25 * (f11[j].position - f10[j].position)),
-                   1e-9));
+        CHECK(near(mid[j].position, Vector3d(f10[j].position + 0.25 * (f11[j].position - f10[j].position)), 1e-9));
     }
     // Used as a (multi-frame, animated) af_pose it still builds, and build points at §8 item 19.
     text::Diagnostics bd;

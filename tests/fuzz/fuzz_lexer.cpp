@@ -22,8 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             if (++tokens > size) std::abort();
             // Token text lies inside the source it was lexed from — except strings joined by a backslash
             // continuation ("a" \ "b"), which the lexer stores itself; those still never contain a quote.
-            const bool inside = t.text.empty() ||
-                                (t.text.data() >= src.data() && t.text.data() + t.text.size() <= src.data() + size);
+            const bool inside =
+                t.text.empty() || (t.text.data() >= src.data() && t.text.data() + t.text.size() <= src.data() + size);
             if (!inside && t.kind != afb::text::TokenKind::String) std::abort();
             if (t.kind == afb::text::TokenKind::String && t.text.find('"') != std::string_view::npos) std::abort();
             if (t.line < lastLine || t.line == 0 || t.column == 0) std::abort();

@@ -34,7 +34,8 @@ struct World {
 afb::figure::LoadedFigure load(const std::filesystem::path& base, const std::string& entity) {
     afb::text::Diagnostics diags;
     std::optional<afb::figure::LoadedFigure> loaded;
-    if (auto lib = afb::decl::Library::open(base, diags)) loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
+    if (auto lib = afb::decl::Library::open(base, diags))
+        loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
     INFO(diags.str());
     REQUIRE(loaded);
     return std::move(*loaded);
@@ -165,7 +166,8 @@ TEST_CASE("velocity inheritance reproduces the motion's velocities", "[runtime]"
     }
 }
 
-TEST_CASE("drop: zsec figures settle on the ground by their rules, stay connected, stay above it", "[runtime][corpus]") {
+TEST_CASE("drop: zsec figures settle on the ground by their rules, stay connected, stay above it",
+          "[runtime][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);
     for (const char* entity : {"monster_zsec_pistol", "monster_zsec_shotgun", "monster_zsec_machinegun"}) {
         const afb::figure::LoadedFigure loaded = load(corpus / "doom3-kroom3/base", entity);
@@ -193,8 +195,9 @@ TEST_CASE("drop: zsec figures settle on the ground by their rules, stay connecte
                     lowest = p.z();
                     const auto& sub = loaded.mesh.meshes[m];
                     const auto vi = static_cast<std::size_t>(&p - skinned[m].data());
-                    lowestShader = sub.shader + " joint " +
-                                   f.skeleton.name(sub.weights[static_cast<std::size_t>(sub.verts[vi].firstWeight)].joint);
+                    lowestShader =
+                        sub.shader + " joint " +
+                        f.skeleton.name(sub.weights[static_cast<std::size_t>(sub.verts[vi].firstWeight)].joint);
                 }
         INFO("lowest vertex is on " << lowestShader);
         // Tolerances: the bodies' hulls stay out of the ground within 1 cm (Bullet's contact slop, checked below).
@@ -242,7 +245,9 @@ TEST_CASE("spawn and remove cycles leave the world as it was", "[runtime]") {
 TEST_CASE("contact friction combines as the engine's: min between ragdoll bodies, own value against the world",
           "[runtime]") {
     // Two loose boxes of one figure, the upper one resting on the lower one, the lower one on the ground.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"low", 0, 0, 0, 2}, {"high", 1, 0, 0, 6}};
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                      {"low", 0, 0, 0, 2},
+                                                      {"high", 1, 0, 0, 6}};
     const auto built = afb::test::buildTestFigure(
         "articulatedFigure f {\n"
         " body \"low\" { joint \"origin\" model box( ( -8, -8, -2 ), ( 8, 8, 2 ) ) origin ( 0, 0, 2 ) density 0.02 "

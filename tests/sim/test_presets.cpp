@@ -50,9 +50,9 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
             o.method = *afb::bullet::methodPreset(b.preset);
             const afb::sim::DropResult r = afb::sim::runDrop(humanoid, o);
             INFO(afb::bullet::describe(o.method));
-            INFO("anchor " << r.maxAnchorErrorM << " m at " << r.worstAnchorJoint << ", limit " << r.maxLimitViolationDeg
-                           << " deg at " << r.worstLimitJoint << ", rest penetration " << r.restPenetrationM
-                           << " m; legacy: anchor " << reference.maxAnchorErrorM << " m, limit "
+            INFO("anchor " << r.maxAnchorErrorM << " m at " << r.worstAnchorJoint << ", limit "
+                           << r.maxLimitViolationDeg << " deg at " << r.worstLimitJoint << ", rest penetration "
+                           << r.restPenetrationM << " m; legacy: anchor " << reference.maxAnchorErrorM << " m, limit "
                            << reference.maxLimitViolationDeg << " deg");
             CHECK_FALSE(r.exploded);
             CHECK(r.maxAnchorErrorM < b.anchorM);
@@ -63,8 +63,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
     }
 }
 
-TEST_CASE("presets: every bundled figure drops from 1 m with the default method without exploding",
-          "[sim][presets]") {
+TEST_CASE("presets: every bundled figure drops from 1 m with the default method without exploding", "[sim][presets]") {
     for (const char* entity : {"humanoid", "props", "buggy", "lamp", "chain"}) {
         afb::sim::DropOptions o;
         o.count = 4; // four yaws, as cmake/demo.sh drops them

@@ -1,14 +1,14 @@
 #pragma once
 // Builds figures for tests: md5 values of a skeleton from a joint list (text only through the md5 writers),
 // an .af decl from inline text, and the Figure.
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
-
-#include <optional>
-#include <string>
-#include <vector>
 
 namespace afb::test {
 
@@ -52,14 +52,10 @@ inline decl::Md5Anim md5Anim(const std::vector<TestJoint>& joints) {
 }
 
 /// md5mesh text of md5Mesh(joints), for tests that need a file.
-inline std::string md5MeshText(const std::vector<TestJoint>& joints) {
-    return decl::writeMd5Mesh(md5Mesh(joints));
-}
+inline std::string md5MeshText(const std::vector<TestJoint>& joints) { return decl::writeMd5Mesh(md5Mesh(joints)); }
 
 /// md5anim text of md5Anim(joints), for tests that need a file.
-inline std::string md5AnimText(const std::vector<TestJoint>& joints) {
-    return decl::writeMd5Anim(md5Anim(joints));
-}
+inline std::string md5AnimText(const std::vector<TestJoint>& joints) { return decl::writeMd5Anim(md5Anim(joints)); }
 
 /// Everything a test needs to keep alive around a built figure.
 struct BuiltFigure {
@@ -73,8 +69,8 @@ inline BuiltFigure buildTestFigure(const std::string& afText, const std::vector<
     BuiltFigure out;
     const auto af = decl::parseAf(afText, "test.af", out.diagnostics);
     if (!af || af->decls.empty()) return out;
-    const auto skeleton = figure::Skeleton::build(md5Mesh(joints), md5Anim(joints), Eigen::Vector3d::Zero(),
-                                                  out.diagnostics, "test");
+    const auto skeleton =
+        figure::Skeleton::build(md5Mesh(joints), md5Anim(joints), Eigen::Vector3d::Zero(), out.diagnostics, "test");
     if (!skeleton) return out;
     out.figure = figure::buildFigure({&af->decls[0], &*skeleton, units}, out.diagnostics);
     return out;

@@ -24,10 +24,10 @@ inline std::filesystem::path sourceDir() { return AFB_SOURCE_DIR; }
 } // namespace afb::test
 
 /// Skips the current Catch2 test case with a message when the corpus is absent.
-#define AFB_REQUIRE_CORPUS(var)                                                                                  \
-    const auto var##_opt = ::afb::test::corpusDir();                                                             \
-    if (!var##_opt) {                                                                                            \
-        WARN("corpus not found (../shared/data or AFB_CORPUS_DIR): skipped");                                     \
-        return;                                                                                                  \
-    }                                                                                                            \
+#define AFB_REQUIRE_CORPUS(var)                                                                                        \
+    const auto var##_opt = ::afb::test::corpusDir();                                                                   \
+    if (!var##_opt) {                                                                                                  \
+        WARN("corpus not found (../shared/data or AFB_CORPUS_DIR): skipped");                                          \
+        return;                                                                                                        \
+    }                                                                                                                  \
     const std::filesystem::path var = *var##_opt

@@ -298,9 +298,17 @@ TEST_CASE("lexer: decimal numbers", "[lexer][number]") {
         bool isInteger;
     };
     const Case cases[] = {
-        {"0", 0.0, true},          {"42", 42.0, true},     {"3.25", 3.25, false},   {"1e-5", 1e-5, false},
-        {"1E3", 1000.0, false},    {"2.5e+2", 250.0, false}, {"1.5f", 1.5, false},  {".5", 0.5, false},
-        {"0.5", 0.5, false},       {"10.", 10.0, false},   {"0.0099999998", 0.0099999998, false},
+        {"0", 0.0, true},
+        {"42", 42.0, true},
+        {"3.25", 3.25, false},
+        {"1e-5", 1e-5, false},
+        {"1E3", 1000.0, false},
+        {"2.5e+2", 250.0, false},
+        {"1.5f", 1.5, false},
+        {".5", 0.5, false},
+        {"0.5", 0.5, false},
+        {"10.", 10.0, false},
+        {"0.0099999998", 0.0099999998, false},
     };
     for (const Case& c : cases) {
         INFO("source: " << c.src);

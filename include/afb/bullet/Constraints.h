@@ -17,13 +17,13 @@ enum class LimitShape { Cone, Pyramid };
 /// f): a cone (angle from f ≤ half1) or a true pyramid (planar angles in span(f, l) ≤ half1 and in span(f, u) ≤
 /// half2, exact atan2 angles so the corners are a pyramid's). Rows whose excess is above −`marginRad` are
 /// returned (0: only violated ones). Returns the row count (≤ 2).
-int directionLimitRows(const btVector3& shaftWorld, const btMatrix3x3& basisWorld, LimitShape shape,
-                       btScalar half1Rad, btScalar half2Rad, btScalar marginRad, LimitRow rows[2]);
+int directionLimitRows(const btVector3& shaftWorld, const btMatrix3x3& basisWorld, LimitShape shape, btScalar half1Rad,
+                       btScalar half2Rad, btScalar marginRad, LimitRow rows[2]);
 
 /// The row of a hinge range: φ (the rotation of frame A relative to frame B about B's Z axis, af-format §4.5)
 /// within [lowerRad, upperRad]. Rows whose excess is above −`marginRad` are returned. Returns 0 or 1.
-int hingeRangeRow(const btMatrix3x3& frameAWorld, const btMatrix3x3& frameBWorld, btScalar lowerRad,
-                  btScalar upperRad, btScalar marginRad, LimitRow& row);
+int hingeRangeRow(const btMatrix3x3& frameAWorld, const btMatrix3x3& frameBWorld, btScalar lowerRad, btScalar upperRad,
+                  btScalar marginRad, LimitRow& row);
 
 /// How limit rows correct: error reduction per step past the limit, and speculation before it.
 struct LimitRowPolicy {

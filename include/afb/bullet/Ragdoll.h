@@ -132,7 +132,7 @@ class Ragdoll {
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
-    std::vector<btTypedConstraint*> m_main;                       ///< per figure constraint
+    std::vector<btTypedConstraint*> m_main;                        ///< per figure constraint
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
 };

@@ -65,7 +65,7 @@ class RagdollWorld {
     btDiscreteDynamicsWorld& m_world;
     Method m_method;
     EngineContactFriction m_friction;
-    std::vector<Ragdoll*> m_ragdolls; ///< in spawn order
+    std::vector<Ragdoll*> m_ragdolls;                               ///< in spawn order
     std::vector<std::pair<const btCollisionObject*, int>> m_owners; ///< body → index into m_ragdolls, sorted
     std::unique_ptr<PositionAction> m_action;
 };

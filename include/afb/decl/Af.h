@@ -24,10 +24,10 @@ struct Vec3 {
 struct AfVector {
     enum class Form : std::uint8_t { Literal, Joint, BoneCenter, BoneDir };
     Form form = Form::Literal;
-    bool negated = false;    ///< a leading '-' (applied once, when the figure is built)
-    Vec3 literal;            ///< Form::Literal: the three numbers
-    std::string joint1;      ///< Joint: J; BoneCenter/BoneDir: A (as written; looked up case-insensitively)
-    std::string joint2;      ///< BoneCenter/BoneDir: B
+    bool negated = false; ///< a leading '-' (applied once, when the figure is built)
+    Vec3 literal;         ///< Form::Literal: the three numbers
+    std::string joint1;   ///< Joint: J; BoneCenter/BoneDir: A (as written; looked up case-insensitively)
+    std::string joint2;   ///< BoneCenter/BoneDir: B
     bool operator==(const AfVector&) const = default;
 
     static AfVector fromLiteral(Vec3 v) { return AfVector{Form::Literal, false, v, {}, {}}; }
@@ -178,12 +178,12 @@ struct AfConstraint {
     std::string name;
     SourceLocation location;
     std::optional<std::string> body1, body2;
-    std::optional<AfVector> anchor;  ///< `anchor`, or a spring's `anchor1`
-    std::optional<AfVector> anchor2; ///< spring only
+    std::optional<AfVector> anchor;                ///< `anchor`, or a spring's `anchor1`
+    std::optional<AfVector> anchor2;               ///< spring only
     std::optional<std::array<AfVector, 2>> shafts; ///< universal only
-    std::optional<AfVector> axis;    ///< hinge and slider
+    std::optional<AfVector> axis;                  ///< hinge and slider
     std::optional<double> friction;
-    AfLimit limit;                   ///< the last limit given wins
+    AfLimit limit;                                                                      ///< the last limit given wins
     std::optional<double> stretch, compress, damping, restLength, minLength, maxLength; ///< spring only
     bool operator==(const AfConstraint&) const = default;
 };

@@ -1,15 +1,15 @@
 #pragma once
 // `.def` files (af-format §7.1, §7.2): `entityDef` key/value decls and `model` decls, as the file says them.
 // Inheritance is not applied here; `decl::Library` resolves it.
-#include "afb/decl/Af.h"
-#include "afb/text/Diagnostics.h"
-
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include "afb/decl/Af.h"
+#include "afb/text/Diagnostics.h"
 
 namespace afb::decl {
 
@@ -96,8 +96,7 @@ struct DefFile {
 /// Parses `.def` text. `entityDef` and `model` decls are read; `export`, `skin`, `table`, `material` and
 /// other decl types are skipped silently. On any error: nullopt with `file:line:col` errors — nothing is
 /// half-loaded. Duplicate entityDef keys and other tolerated oddities are reported as warnings.
-std::optional<DefFile> parseDef(std::string_view text, const std::string& fileName,
-                                text::Diagnostics& diagnostics);
+std::optional<DefFile> parseDef(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics);
 
 /// Reads and parses one `.def` file (locations name `path` as given).
 std::optional<DefFile> loadDef(const std::filesystem::path& path, text::Diagnostics& diagnostics);

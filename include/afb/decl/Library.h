@@ -1,10 +1,6 @@
 #pragma once
 // An indexed content folder (Doom's `base/`: `af/`, `def/`, `models/`) and the resolution of an entity to
 // what a ragdoll needs: merged keys, model decl, mesh, af_pose anim and articulated figure (af-format §7).
-#include "afb/decl/Af.h"
-#include "afb/decl/Def.h"
-#include "afb/text/Diagnostics.h"
-
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -13,6 +9,10 @@
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include "afb/decl/Af.h"
+#include "afb/decl/Def.h"
+#include "afb/text/Diagnostics.h"
 
 namespace afb::decl {
 
@@ -146,11 +146,9 @@ class Library {
     bool mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const;
     bool resolveEntityModel(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const;
     bool resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) const;
-    bool resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r,
-                             text::Diagnostics& diagnostics) const;
+    bool resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const;
     std::optional<std::filesystem::path> contentPath(const std::string& relative, const std::string& what,
-                                                     const SourceLocation& where,
-                                                     text::Diagnostics& diagnostics) const;
+                                                     const SourceLocation& where, text::Diagnostics& diagnostics) const;
 
     std::filesystem::path m_baseDir;
     std::vector<std::filesystem::path> m_files;

@@ -5,16 +5,16 @@
 // root translation from the animated root components and then zeroes the baseframe root translation
 // (af-format §7.4, §8 item 19); that meaning belongs to the layer that builds poses from an anim, not to this
 // value type.
-#include "afb/decl/Af.h"
-#include "afb/decl/Md5Mesh.h"
-#include "afb/text/Diagnostics.h"
-
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "afb/decl/Af.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/text/Diagnostics.h"
 
 namespace afb::decl {
 
@@ -48,8 +48,7 @@ struct Md5Bounds {
 
 /// One line of the `baseframe { }` block: a joint's values for the components its flags do not animate.
 struct Md5BaseJoint {
-    Vec3
-        position; ///< translation relative to the parent joint (root: model-relative), Doom units, as written
+    Vec3 position;    ///< translation relative to the parent joint (root: model-relative), Doom units, as written
     Vec3 orientation; ///< parent-relative orientation qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|), §7.3)
     bool operator==(const Md5BaseJoint&) const = default;
 };
@@ -62,8 +61,8 @@ struct Md5Anim {
     int numAnimatedComponents = 0;            ///< floats per frame, 0..6 × joints
     std::vector<Md5HierarchyEntry> hierarchy; ///< one entry per joint, in joint order
     std::vector<Md5Bounds> bounds;            ///< one box per frame
-    std::vector<Md5BaseJoint> baseframe;     ///< one entry per joint; root translation NOT zeroed (see above)
-    std::vector<std::vector<double>> frames; ///< `frame k` values, each numAnimatedComponents long, k = index
+    std::vector<Md5BaseJoint> baseframe;      ///< one entry per joint; root translation NOT zeroed (see above)
+    std::vector<std::vector<double>> frames;  ///< `frame k` values, each numAnimatedComponents long, k = index
     bool operator==(const Md5Anim&) const = default;
 };
 
@@ -78,8 +77,7 @@ std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh&
 /// Parses `.md5anim` text. Every count, index and reference is checked (af-format §7.4); on any error:
 /// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
 /// locations only.
-std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName,
-                                    text::Diagnostics& diagnostics);
+std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics);
 
 /// Reads and parses one `.md5anim` file.
 std::optional<Md5Anim> loadMd5Anim(const std::filesystem::path& path, text::Diagnostics& diagnostics);

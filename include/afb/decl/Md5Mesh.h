@@ -2,15 +2,15 @@
 // Value types and parser for `.md5mesh` files (af-format §7.3): what the file says, nothing more. Joint
 // transforms stay in the file's Doom conventions (model-space bind pose, quaternion w left implicit); the
 // figure layer converts them (af-format §0, §8 item 21).
-#include "afb/decl/Af.h"
-#include "afb/text/Diagnostics.h"
-
 #include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "afb/decl/Af.h"
+#include "afb/text/Diagnostics.h"
 
 namespace afb::decl {
 
@@ -28,8 +28,7 @@ struct Md5Joint {
 struct Md5Vert {
     double s = 0, t = 0; ///< texture coordinates as written
     int firstWeight = 0; ///< index of the vertex's first weight in Md5SubMesh::weights
-    int weightCount =
-        1; ///< number of consecutive weights, at least 1 (firstWeight + weightCount <= weights.size())
+    int weightCount = 1; ///< number of consecutive weights, at least 1 (firstWeight + weightCount <= weights.size())
     bool operator==(const Md5Vert&) const = default;
 };
 
@@ -80,8 +79,7 @@ std::size_t totalWeightCount(const Md5Mesh& mesh);
 /// Parses `.md5mesh` text. Every count, index and reference is checked (af-format §7.3); on any error:
 /// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
 /// locations only.
-std::optional<Md5Mesh> parseMd5Mesh(std::string_view text, const std::string& fileName,
-                                    text::Diagnostics& diagnostics);
+std::optional<Md5Mesh> parseMd5Mesh(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics);
 
 /// Reads and parses one `.md5mesh` file.
 std::optional<Md5Mesh> loadMd5Mesh(const std::filesystem::path& path, text::Diagnostics& diagnostics);

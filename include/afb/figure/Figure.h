@@ -18,9 +18,9 @@ namespace afb::figure {
 
 /// The one unit conversion (ARCHITECTURE.md "one conversion point"): Doom units and steps to SI.
 struct UnitSystem {
-    double metresPerUnit = 0.0254;       ///< length of one Doom unit (1 inch by default)
-    double gravityMps2 = 9.81;           ///< gravity magnitude along −Z, m/s² (Doom: 1066 units/s² ≈ 27.08 m/s²)
-    double engineStepSeconds = 0.016;    ///< the engine's fixed step (USERCMD_MSEC = 16 ms) for per-step friction
+    double metresPerUnit = 0.0254;    ///< length of one Doom unit (1 inch by default)
+    double gravityMps2 = 9.81;        ///< gravity magnitude along −Z, m/s² (Doom: 1066 units/s² ≈ 27.08 m/s²)
+    double engineStepSeconds = 0.016; ///< the engine's fixed step (USERCMD_MSEC = 16 ms) for per-step friction
 
     /// Doom's own gravity, 1066 units/s², in m/s² for this unit length.
     double doomGravityMps2() const { return 1066.0 * metresPerUnit; }
@@ -32,8 +32,8 @@ enum class JointMod : std::uint8_t { Orientation, Position, Both };
 /// A body's collision geometry in its body frame (centre of mass, principal axes), metres.
 struct BodyShape {
     ShapeType kind = ShapeType::Box;
-    std::vector<Eigen::Vector3d> vertices;      ///< the engine's exact polytope, body frame, metres
-    std::vector<std::vector<int>> faces;        ///< outward counter-clockwise vertex loops
+    std::vector<Eigen::Vector3d> vertices; ///< the engine's exact polytope, body frame, metres
+    std::vector<std::vector<int>> faces;   ///< outward counter-clockwise vertex loops
     /// Set when the shape is a box whose axes are the principal axes: its half extents, metres.
     std::optional<Eigen::Vector3d> boxHalfExtents;
     int sidesUsed = 0; ///< cylinder/cone: sides after the engine's clamps; 0 otherwise
@@ -41,29 +41,29 @@ struct BodyShape {
 
 /// One rigid body of the figure.
 struct FigureBody {
-    std::string name;                 ///< as written in the decl
-    text::SourceLocation location;    ///< the body block
-    int joint = -1;                   ///< md5 joint this body drives (origin body: first child of "origin")
-    std::string jointName;            ///< the decl's joint name
+    std::string name;              ///< as written in the decl
+    text::SourceLocation location; ///< the body block
+    int joint = -1;                ///< md5 joint this body drives (origin body: first child of "origin")
+    std::string jointName;         ///< the decl's joint name
     JointMod mod = JointMod::Orientation;
     BodyShape shape;
-    double volumeM3 = 0;              ///< polytope volume
-    double massKg = 0;                ///< after density, the invalid-mass rule and totalMass scaling (§3.3)
+    double volumeM3 = 0; ///< polytope volume
+    double massKg = 0;   ///< after density, the invalid-mass rule and totalMass scaling (§3.3)
     Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Ones(); ///< principal moments about the body frame axes
     /// Body frame (centre of mass, principal axes) in model space at the load pose, metres.
     Transform loadPose;
     /// The driven joint's load-pose frame expressed in the body frame (inverse of the §2.3 joint→body offset).
     Transform jointInBody;
-    double linearFrictionPerStep = 0.01;  ///< the engine's per-step velocity loss fraction (§3.4)
-    double angularFrictionPerStep = 0.01; ///< the engine's per-step angular velocity loss fraction (§3.4)
-    double linearDamping = 0;             ///< the same loss per second as Bullet damping: 1 − (1 − f)^(1/step)
-    double angularDamping = 0;            ///< likewise for angular velocity
-    double contactFriction = 0.8;         ///< Coulomb coefficient; pairs combine by minimum (§4.8)
-    bool selfCollision = true;            ///< the body's own flag (§6.2)
-    std::uint32_t contents = kContentsCorpse;                                  ///< contents bits (§1.6)
+    double linearFrictionPerStep = 0.01;      ///< the engine's per-step velocity loss fraction (§3.4)
+    double angularFrictionPerStep = 0.01;     ///< the engine's per-step angular velocity loss fraction (§3.4)
+    double linearDamping = 0;                 ///< the same loss per second as Bullet damping: 1 − (1 − f)^(1/step)
+    double angularDamping = 0;                ///< likewise for angular velocity
+    double contactFriction = 0.8;             ///< Coulomb coefficient; pairs combine by minimum (§4.8)
+    bool selfCollision = true;                ///< the body's own flag (§6.2)
+    std::uint32_t contents = kContentsCorpse; ///< contents bits (§1.6)
     std::uint32_t clipMask = kContentsSolid | kContentsCorpse | kContentsMoveableClip;
-    std::vector<int> containedJoints;     ///< md5 joints whose impacts this body takes (§5.3), ascending
-    std::optional<Eigen::Vector3d> frictionDirection;     ///< body frame, unit; single-direction friction
+    std::vector<int> containedJoints;                 ///< md5 joints whose impacts this body takes (§5.3), ascending
+    std::optional<Eigen::Vector3d> frictionDirection; ///< body frame, unit; single-direction friction
     std::optional<Eigen::Vector3d> contactMotorDirection; ///< body frame, unit
 };
 
@@ -77,8 +77,8 @@ struct ConeLimit {
 /// True pyramid limit (§4.3): the shaft's angle from f, projected onto span(f, l), is at most halfAngle1Rad,
 /// and projected onto span(f, f×l), at most halfAngle2Rad.
 struct PyramidLimit {
-    Eigen::Matrix3d basisInBody2;  ///< columns f, l, f×l (unit, right-handed); model space for the world
-    Eigen::Vector3d shaftInBody1;  ///< unit
+    Eigen::Matrix3d basisInBody2; ///< columns f, l, f×l (unit, right-handed); model space for the world
+    Eigen::Vector3d shaftInBody1; ///< unit
     double halfAngle1Rad = 0;
     double halfAngle2Rad = 0;
 };
@@ -96,8 +96,8 @@ struct SpringParams {
     double compressNPerM2 = 0; ///< k for L < rest, N/m²
     double dampingNs = 0;      ///< D = damping·|relative speed along n| (scaled to SI), N per (m/s)
     double restLengthM = 0;
-    double minLengthM = 0;     ///< a length row pushes the anchors apart below this
-    double maxLengthM = 0;     ///< > 0: a length row pulls them together above this
+    double minLengthM = 0; ///< a length row pushes the anchors apart below this
+    double maxLengthM = 0; ///< > 0: a length row pulls them together above this
 };
 
 /// One constraint. Frames coincide (position and orientation) at the load pose, so every constraint is exactly
@@ -108,19 +108,19 @@ struct FigureConstraint {
     std::string name;
     text::SourceLocation location;
     JointType type = JointType::Fixed;
-    int body1 = 0;              ///< index into Figure::bodies
-    int body2 = -1;             ///< index into Figure::bodies, or −1 for the world
-    Transform frameInBody1;     ///< constraint frame in body1's frame, metres
-    Transform frameInBody2;     ///< in body2's frame, or in model space when body2 is the world
-    double friction = 0;        ///< joint friction coefficient (§4.8); 0 where the engine applies none
+    int body1 = 0;          ///< index into Figure::bodies
+    int body2 = -1;         ///< index into Figure::bodies, or −1 for the world
+    Transform frameInBody1; ///< constraint frame in body1's frame, metres
+    Transform frameInBody2; ///< in body2's frame, or in model space when body2 is the world
+    double friction = 0;    ///< joint friction coefficient (§4.8); 0 where the engine applies none
     std::variant<std::monostate, ConeLimit, PyramidLimit, HingeRange> limit;
-    SpringParams spring;        ///< type Spring only; frames' origins are anchor1 (body1) and anchor2 (body2)
+    SpringParams spring;           ///< type Spring only; frames' origins are anchor1 (body1) and anchor2 (body2)
     bool disablesCollision = true; ///< the two bodies never collide (every type but spring, §4.1)
 };
 
 /// Rest rules in SI (§6.1).
 struct RestRules {
-    double linearSpeedMps = 0, angularSpeedRadps = 0; ///< suspendSpeed[0], [1]
+    double linearSpeedMps = 0, angularSpeedRadps = 0;   ///< suspendSpeed[0], [1]
     double linearAccelMps2 = 0, angularAccelRadps2 = 0; ///< suspendSpeed[2], [3]
     double noMoveTimeS = 1, noMoveTranslationM = 0, noMoveRotationRad = 0;
     double minMoveTimeS = -1, maxMoveTimeS = -1; ///< ≤ 0: disabled
@@ -130,19 +130,19 @@ struct RestRules {
 struct Figure {
     std::string name;
     UnitSystem units;
-    Skeleton skeleton;                          ///< the md5 skeleton, Doom units (see Skeleton)
-    std::vector<FigureBody> bodies;             ///< body 0 is the origin body
-    std::vector<FigureConstraint> constraints;  ///< in decl order
-    bool selfCollision = true;                  ///< the settings switch (§6.2)
+    Skeleton skeleton;                         ///< the md5 skeleton, Doom units (see Skeleton)
+    std::vector<FigureBody> bodies;            ///< body 0 is the origin body
+    std::vector<FigureConstraint> constraints; ///< in decl order
+    bool selfCollision = true;                 ///< the settings switch (§6.2)
     RestRules rest;
-    std::vector<int> jointBody;                 ///< per md5 joint: the body that contains it, −1 if none (§5.3)
+    std::vector<int> jointBody; ///< per md5 joint: the body that contains it, −1 if none (§5.3)
     double totalMassKg = 0;
 };
 
 /// What the figure is built from.
 struct FigureInput {
-    const decl::AfDecl* decl = nullptr;  ///< the parsed figure
-    const Skeleton* skeleton = nullptr;  ///< the mesh skeleton with its af_pose load pose
+    const decl::AfDecl* decl = nullptr; ///< the parsed figure
+    const Skeleton* skeleton = nullptr; ///< the mesh skeleton with its af_pose load pose
     UnitSystem units;
 };
 

@@ -4,15 +4,14 @@
 // of the two bodies' frames (centre of mass, principal axes) to world; for a world constraint (body2 = −1)
 // the "body2 rotation" is the model → world rotation, since the figure keeps body2's data in model space
 // then.
-#include "afb/figure/Figure.h"
-
 #include <Eigen/Core>
+
+#include "afb/figure/Figure.h"
 
 namespace afb::figure {
 
 /// Angle between the cone's shaft (fixed in body1) and its axis (fixed in body2), radians in [0, π].
-double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation,
-                    const Eigen::Matrix3d& body2Rotation);
+double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation, const Eigen::Matrix3d& body2Rotation);
 
 /// The pyramid's two planar angles of the shaft (body1) in its basis f, l, u = f×l (body2), radians in
 /// (−π, π]: x = atan2(s·l, s·f), the angle in span(f, l), limited by halfAngle1Rad; y = atan2(s·u, s·f), the

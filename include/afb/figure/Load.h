@@ -14,8 +14,8 @@ namespace afb::figure {
 /// A built figure with the inputs it came from (the mesh is kept for skinning).
 struct LoadedFigure {
     Figure figure;
-    decl::Md5Mesh mesh;          ///< the md5mesh the skeleton came from
-    decl::AfDecl decl;           ///< the articulatedFigure decl as parsed
+    decl::Md5Mesh mesh;           ///< the md5mesh the skeleton came from
+    decl::AfDecl decl;            ///< the articulatedFigure decl as parsed
     std::filesystem::path afFile; ///< where the decl came from
     /// The entity asks to spawn at rest until touched: `"nodrop" "1"` (the engine's key) or `"sleep" "1"` (the
     /// id modding page's spelling). Always false for loadFigureFiles.

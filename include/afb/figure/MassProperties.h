@@ -1,9 +1,9 @@
 #pragma once
 // Exact mass properties of a polytope of uniform density (af-format §3.2), and the engine's clip-model rule
 // for zero-volume shapes. Units follow the inputs: lengths in the polytope's unit L, density in mass per L³.
-#include "afb/figure/Polytope.h"
-
 #include <Eigen/Geometry>
+
+#include "afb/figure/Polytope.h"
 
 namespace afb::figure {
 

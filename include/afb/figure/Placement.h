@@ -9,7 +9,7 @@ namespace afb::figure {
 
 /// A body's motion state in world space, SI.
 struct BodyState {
-    Transform pose;                                        ///< body frame (centre of mass, principal axes)
+    Transform pose;                                            ///< body frame (centre of mass, principal axes)
     Eigen::Vector3d linearVelocity = Eigen::Vector3d::Zero();  ///< m/s of the centre of mass
     Eigen::Vector3d angularVelocity = Eigen::Vector3d::Zero(); ///< rad/s
 };
@@ -25,6 +25,7 @@ std::vector<Transform> bodiesFromJoints(const Figure& figure, const Transform& e
 /// Body states with velocities inherited from two poses `dt` seconds apart: linear velocity of the centre of
 /// mass and angular velocity (the rotation from `before` to `after` as a rotation vector / dt). The engine
 /// inherits only the linear part (§5.4); both are given here, from `after`'s pose.
-std::vector<BodyState> inheritVelocities(std::span<const Transform> before, std::span<const Transform> after, double dt);
+std::vector<BodyState> inheritVelocities(std::span<const Transform> before, std::span<const Transform> after,
+                                         double dt);
 
 } // namespace afb::figure

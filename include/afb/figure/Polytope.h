@@ -2,10 +2,11 @@
 // The engine's trace-model shapes as exact convex polytopes (af-format §3.1), in body-local coordinates.
 // Lengths are in whatever unit the caller passes (Doom units when built from a decl; the figure layer scales
 // afterwards). No Doom row-matrix math leaks out: `boneFrame` returns a standard column rotation.
-#include <Eigen/Geometry>
 #include <optional>
 #include <span>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 namespace afb::figure {
 
@@ -29,8 +30,7 @@ struct Polytope {
 /// The outward unit normal of one face loop over `vertices` (counter-clockwise seen from outside): the sum of
 /// the cross products of consecutive vertices (Newell's method, exact for planar loops), normalized. nullopt
 /// for a degenerate face (fewer than 3 vertices, or zero area).
-std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices,
-                                          std::span<const int> face);
+std::optional<Eigen::Vector3d> faceNormal(std::span<const Eigen::Vector3d> vertices, std::span<const int> face);
 
 /// A face's plane: points p on it have normal · p = offset, points inside the polytope normal · p ≤ offset.
 struct FacePlane {
@@ -40,8 +40,7 @@ struct FacePlane {
 
 /// The plane of every non-degenerate face (see faceNormal), through the face's vertex centroid, in face
 /// order.
-std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices,
-                                  std::span<const std::vector<int>> faces);
+std::vector<FacePlane> facePlanes(std::span<const Eigen::Vector3d> vertices, std::span<const std::vector<int>> faces);
 
 /// The distance from the origin to the nearest of `planes` (for a body's polytope: the radius of the largest
 /// sphere about its centre of mass that fits inside); negative when the origin is outside, +infinity for

@@ -5,16 +5,17 @@
 // (§5.1). Everything here is in Doom units, model space (X forward, Y left, Z up) and standard column
 // rotations: the md5 quaternion sign and Doom's row matrices are converted once, when the transforms are made
 // (af-format §0, §7.3).
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
-#include "afb/figure/Transform.h"
-#include "afb/text/Diagnostics.h"
-
-#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <Eigen/Core>
+
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/figure/Transform.h"
+#include "afb/text/Diagnostics.h"
 
 namespace afb::figure {
 

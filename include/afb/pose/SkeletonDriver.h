@@ -13,9 +13,9 @@ using figure::Transform;
 
 /// A driven skeleton, metres.
 struct SkeletonPose {
-    Transform entity;                ///< model space to world: follows body 0 rigidly (§5.1 step 1)
-    std::vector<Transform> model;    ///< every md5 joint in model space
-    std::vector<Transform> local;    ///< every md5 joint relative to its parent (the root: model space)
+    Transform entity;             ///< model space to world: follows body 0 rigidly (§5.1 step 1)
+    std::vector<Transform> model; ///< every md5 joint in model space
+    std::vector<Transform> local; ///< every md5 joint relative to its parent (the root: model space)
 
     /// Every joint in world space (entity ∘ model).
     std::vector<Transform> world() const;

@@ -14,17 +14,17 @@ namespace afb::sim {
 /// A drop scenario: where and how long. How the figure is stepped is the method. Times in seconds, lengths in
 /// metres.
 struct DropOptions {
-    double heightM = 1.0;          ///< lowest point of each figure above the ground at spawn
-    int count = 1;                 ///< instances of the figure, on a grid in one world (or split over worlds)
-    int worlds = 1;                ///< independent worlds the instances are split over, each on its own thread
+    double heightM = 1.0;              ///< lowest point of each figure above the ground at spawn
+    int count = 1;                     ///< instances of the figure, on a grid in one world (or split over worlds)
+    int worlds = 1;                    ///< independent worlds the instances are split over, each on its own thread
     std::optional<std::uint32_t> seed; ///< random initial orientations (yaw and a tilt); none: yaw = 37°·i
-    double seconds = 10.0;         ///< simulated time (ignored when steps is set)
-    std::optional<int> steps;      ///< exact number of steps; 0 reports the spawn pose
-    double hz = 60.0;              ///< fixed frame rate (each frame is the method's substeps)
-    bullet::Method method = {};    ///< how the figures are simulated
-    bool sleeping = true;          ///< the figure's rest rules put it to sleep
-    bool stopAtRest = false;       ///< end the run as soon as every instance is at rest
-    bool startAtRest = false;      ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
+    double seconds = 10.0;             ///< simulated time (ignored when steps is set)
+    std::optional<int> steps;          ///< exact number of steps; 0 reports the spawn pose
+    double hz = 60.0;                  ///< fixed frame rate (each frame is the method's substeps)
+    bullet::Method method = {};        ///< how the figures are simulated
+    bool sleeping = true;              ///< the figure's rest rules put it to sleep
+    bool stopAtRest = false;           ///< end the run as soon as every instance is at rest
+    bool startAtRest = false;          ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
 };
 
 /// One joint of a settled pose: model space of the instance, metres.
@@ -43,7 +43,7 @@ struct DropResult {
     double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
     long long awakeBodySteps = 0;
     double maxAnchorErrorM = 0, maxLimitViolationDeg = 0, maxPenetrationM = 0, maxEnergyGainJ = 0;
-    double restPenetrationM = 0; ///< deepest contact over the last simulated second
+    double restPenetrationM = 0;  ///< deepest contact over the last simulated second
     std::string worstAnchorJoint; ///< the constraint with the largest anchor error (empty when none)
     std::string worstLimitJoint;  ///< the constraint with the largest limit violation (empty when none)
     std::string worstContact;     ///< the pair of the deepest contact, "body / ground" or "body / body"

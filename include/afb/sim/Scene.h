@@ -15,8 +15,8 @@ namespace afb::sim {
 
 /// What the scene holds besides the ragdolls.
 struct SceneSettings {
-    double gravityMps2 = 9.81;  ///< along −Z (0: weightless)
-    bool ground = true;         ///< a static plane z = 0
+    double gravityMps2 = 9.81;   ///< along −Z (0: weightless)
+    bool ground = true;          ///< a static plane z = 0
     double groundFriction = 1.0; ///< Coulomb coefficient of the ground
 };
 

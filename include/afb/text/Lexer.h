@@ -24,12 +24,12 @@ enum class TokenKind : std::uint8_t {
 /// lexer's own storage); the lexer and its source must outlive the token.
 struct Token {
     TokenKind kind = TokenKind::End;
-    std::string_view text;       ///< as written (String/Literal: without the quotes)
-    std::uint32_t line = 0;      ///< 1-based
-    std::uint32_t column = 0;    ///< 1-based, in bytes
-    double value = 0.0;          ///< Number: its value
-    std::uint64_t integer = 0;   ///< Number written as an integer: its exact value
-    bool isInteger = false;      ///< no '.', exponent or float suffix (decimal, octal, hex or binary)
+    std::string_view text;     ///< as written (String/Literal: without the quotes)
+    std::uint32_t line = 0;    ///< 1-based
+    std::uint32_t column = 0;  ///< 1-based, in bytes
+    double value = 0.0;        ///< Number: its value
+    std::uint64_t integer = 0; ///< Number written as an integer: its exact value
+    bool isInteger = false;    ///< no '.', exponent or float suffix (decimal, octal, hex or binary)
 
     bool isPunct(char c) const { return kind == TokenKind::Punct && text.size() == 1 && text[0] == c; }
     /// A Name equal to `s`, case-sensitively.
@@ -116,7 +116,8 @@ class Lexer {
     std::uint32_t m_column = 1;
     std::optional<Token> m_peeked;
     bool m_backslashConcat = false;
-    std::deque<std::string> m_joinedStrings; ///< storage of strings joined by backslash continuations (stable addresses)
+    std::deque<std::string>
+        m_joinedStrings; ///< storage of strings joined by backslash continuations (stable addresses)
 };
 
 } // namespace afb::text

@@ -11,9 +11,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-Vector3d literal(const AfVector& v) {
-    return {v.literal.x, v.literal.y, v.literal.z};
-}
+Vector3d literal(const AfVector& v) { return {v.literal.x, v.literal.y, v.literal.z}; }
 
 /// Volume of the shape as the engine builds it (figure layer polytopes, exact integration, af-format §3.2);
 /// a bone's length comes from the skeleton.
@@ -21,42 +19,22 @@ double volumeOf(const AfShape& s, const Skeleton& sk) {
     const int sides = static_cast<int>(s.numSides);
     figure::Polytope p;
     switch (s.kind) {
-    case ShapeKind::Box:
-        p = figure::makeBox(literal(s.v1), literal(s.v2));
-        break;
-    case ShapeKind::Octahedron:
-        p = figure::makeOctahedron(literal(s.v1), literal(s.v2));
-        break;
-    case ShapeKind::Dodecahedron:
-        p = figure::makeDodecahedron(literal(s.v1), literal(s.v2));
-        break;
-    case ShapeKind::Cylinder:
-        p = figure::makeCylinder(literal(s.v1), literal(s.v2), sides).polytope;
-        break;
-    case ShapeKind::Cone:
-        p = figure::makeCone(literal(s.v1), literal(s.v2), sides).polytope;
-        break;
-    case ShapeKind::Bone:
-        p = figure::makeBone((sk.pos(s.v2.joint1) - sk.pos(s.v1.joint1)).norm(), s.width);
-        break;
+    case ShapeKind::Box: p = figure::makeBox(literal(s.v1), literal(s.v2)); break;
+    case ShapeKind::Octahedron: p = figure::makeOctahedron(literal(s.v1), literal(s.v2)); break;
+    case ShapeKind::Dodecahedron: p = figure::makeDodecahedron(literal(s.v1), literal(s.v2)); break;
+    case ShapeKind::Cylinder: p = figure::makeCylinder(literal(s.v1), literal(s.v2), sides).polytope; break;
+    case ShapeKind::Cone: p = figure::makeCone(literal(s.v1), literal(s.v2), sides).polytope; break;
+    case ShapeKind::Bone: p = figure::makeBone((sk.pos(s.v2.joint1) - sk.pos(s.v1.joint1)).norm(), s.width); break;
     }
     return figure::computeMassProperties(p, 1.0).volume;
 }
 
 } // namespace
 
-AfVector lit(double x, double y, double z) {
-    return AfVector::fromLiteral({rnd(x, 6), rnd(y, 6), rnd(z, 6)});
-}
-AfVector lit(const Vector3d& v) {
-    return lit(v.x(), v.y(), v.z());
-}
-AfVector jointV(const std::string& j) {
-    return AfVector::fromJoint(j);
-}
-AfVector boneCenter(const std::string& a, const std::string& b) {
-    return AfVector::fromBoneCenter(a, b);
-}
+AfVector lit(double x, double y, double z) { return AfVector::fromLiteral({rnd(x, 6), rnd(y, 6), rnd(z, 6)}); }
+AfVector lit(const Vector3d& v) { return lit(v.x(), v.y(), v.z()); }
+AfVector jointV(const std::string& j) { return AfVector::fromJoint(j); }
+AfVector boneCenter(const std::string& a, const std::string& b) { return AfVector::fromBoneCenter(a, b); }
 AfVector boneDir(const std::string& a, const std::string& b, bool negated) {
     return AfVector::fromBoneDir(a, b, negated);
 }
@@ -79,9 +57,7 @@ AfShape boneShape(const std::string& a, const std::string& b, double width) {
     return s;
 }
 
-AfBuilder::AfBuilder(const std::string& name, const Skeleton& skel) : sk(skel) {
-    decl.name = name;
-}
+AfBuilder::AfBuilder(const std::string& name, const Skeleton& skel) : sk(skel) { decl.name = name; }
 
 void AfBuilder::settings(const std::string& model, double totalMass) {
     AfSettings s;
@@ -101,8 +77,8 @@ void AfBuilder::settings(const std::string& model, double totalMass) {
     decl.settings.push_back(s);
 }
 
-AfBody& AfBuilder::body(const std::string& name, const std::string& joint, AfShape model, AfVector origin,
-                        double mass, const std::string& contained, bool selfCollision) {
+AfBody& AfBuilder::body(const std::string& name, const std::string& joint, AfShape model, AfVector origin, double mass,
+                        const std::string& contained, bool selfCollision) {
     AfBody b;
     b.name = name;
     b.joint = joint;

@@ -1,12 +1,13 @@
 #pragma once
 // Building .af decls for afb_gen_content: vector and shape shorthands and an AfBuilder that keeps the blocks
 // in order and derives each body's density from the mass it should have.
-#include "Rig.h"
-#include "afb/decl/Af.h"
-
-#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+
+#include <Eigen/Geometry>
+
+#include "Rig.h"
+#include "afb/decl/Af.h"
 
 namespace afb::gen {
 
@@ -36,12 +37,11 @@ struct AfBuilder {
     void settings(const std::string& model, double totalMass);
 
     /// A body whose density gives it `mass` (before the settings' totalMass rescaling).
-    decl::AfBody& body(const std::string& name, const std::string& joint, decl::AfShape model,
-                       decl::AfVector origin, double mass, const std::string& contained,
-                       bool selfCollision = true);
+    decl::AfBody& body(const std::string& name, const std::string& joint, decl::AfShape model, decl::AfVector origin,
+                       double mass, const std::string& contained, bool selfCollision = true);
 
-    decl::AfConstraint& constraint(decl::ConstraintType type, const std::string& name,
-                                   const std::string& body1, const std::string& body2);
+    decl::AfConstraint& constraint(decl::ConstraintType type, const std::string& name, const std::string& body1,
+                                   const std::string& body2);
 
     /// A spring between anchors `a1` on body1 and `a2` on body2, with the project's stiffness and damping.
     decl::AfConstraint& spring(const std::string& name, const std::string& body1, const std::string& body2,

@@ -1,12 +1,13 @@
 #pragma once
 // What every part of afb_gen_content shares: angle constants, the rounding that keeps the output short and
 // stable, the output folder, and the entry point of each bundled figure.
-#include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 namespace afb::gen {
 

@@ -1,16 +1,16 @@
 // The humanoid: a 30-joint skeleton, a skinned body and head made of tubes, its 15-body ragdoll and a walk
 // cycle.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
 #include "AfBuilder.h"
 #include "Common.h"
 #include "Rig.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
-
-#include <algorithm>
-#include <cmath>
-#include <string>
-#include <vector>
 
 namespace afb::gen {
 
@@ -67,12 +67,9 @@ std::vector<Mesh> humanoidMeshes(const Skeleton& sk) {
     auto P = [&](const std::string& n) { return sk.pos(n); };
     // Torso: hips, abdomen, chest (elliptic: deeper across Y than across X).
     tube(body, sk, {0, 0, 32}, {0, 0, 43}, linear(4.8, 7.2, 4.4, 6.4), {J("pelvis"), -1, 6, N, true, false});
-    tube(body, sk, {0, 0, 43}, {0, 0, 50}, linear(4.4, 6.4, 5.2, 7.6),
-         {J("spine"), J("pelvis"), 5, N, false, false});
-    tube(body, sk, {0, 0, 50}, {0, 0, 59}, linear(5.2, 7.6, 3.6, 6.6),
-         {J("chest"), J("spine"), 6, N, false, true});
-    tube(body, sk, {0, 0, 58}, {0, 0, 62.5}, linear(2.1, 2.1, 2.0, 2.0),
-         {J("neck"), J("chest"), 3, N, false, false});
+    tube(body, sk, {0, 0, 43}, {0, 0, 50}, linear(4.4, 6.4, 5.2, 7.6), {J("spine"), J("pelvis"), 5, N, false, false});
+    tube(body, sk, {0, 0, 50}, {0, 0, 59}, linear(5.2, 7.6, 3.6, 6.6), {J("chest"), J("spine"), 6, N, false, true});
+    tube(body, sk, {0, 0, 58}, {0, 0, 62.5}, linear(2.1, 2.1, 2.0, 2.0), {J("neck"), J("chest"), 3, N, false, false});
     // Head: a bulging tube with caps, plus the jaw.
     tube(head, sk, {0.5, 0, 60.8}, {0.5, 0, 71},
          [](double t) {
@@ -103,8 +100,7 @@ std::vector<Mesh> humanoidMeshes(const Skeleton& sk) {
         tube(body, sk, P(p + "_shin"), P(p + "_foot"), linear(2.3, 2.3, 1.5, 1.5),
              {J(p + "_shin"), J(p + "_thigh"), 8, N, false, true});
         const Vector3d heel = P(p + "_foot") + Vector3d(-2, 0, -1.5);
-        tube(body, sk, heel, P(p + "_toe"), linear(1.5, 1.8, 1.1, 1.8),
-             {J(p + "_foot"), -1, 5, N, true, false});
+        tube(body, sk, heel, P(p + "_toe"), linear(1.5, 1.8, 1.1, 1.8), {J(p + "_foot"), -1, 5, N, true, false});
         tube(body, sk, P(p + "_toe"), P(p + "_toe") + Vector3d(3, 0, -0.2), linear(1.1, 1.8, 0.7, 1.5),
              {J(p + "_toe"), J(p + "_foot"), 3, N, false, true});
     }
@@ -119,11 +115,11 @@ std::string humanoidAf(const Skeleton& sk) {
     af.body("pelvis", "origin", shape(ShapeKind::Box, {-4.5, -6.5, -4}, {4.5, 6.5, 4}), lit(0, 0, 38), 10,
             "*origin -*spine -*l_thigh -*r_thigh")
         .friction = BodyFriction{0.01, 0.01, 0.8};
-    af.body("torso", "spine", shape(ShapeKind::Box, {-4, -6.5, -7.5}, {4, 6.5, 7.5}),
-            boneCenter("spine", "neck"), 14, "*spine -*neck -*l_upperarm -*r_upperarm")
+    af.body("torso", "spine", shape(ShapeKind::Box, {-4, -6.5, -7.5}, {4, 6.5, 7.5}), boneCenter("spine", "neck"), 14,
+            "*spine -*neck -*l_upperarm -*r_upperarm")
         .friction = BodyFriction{0.01, 0.01, 0.8};
-    af.body("head", "neck", shape(ShapeKind::Dodecahedron, {-4, -3.8, -1.5}, {4.5, 3.8, 8.5}), jointV("head"),
-            5, "*neck")
+    af.body("head", "neck", shape(ShapeKind::Dodecahedron, {-4, -3.8, -1.5}, {4.5, 3.8, 8.5}), jointV("head"), 5,
+            "*neck")
         .friction = BodyFriction{0.02, 0.02, 0.6};
     for (const char* side : {"l", "r"}) {
         const std::string p = side;
@@ -146,10 +142,9 @@ std::string humanoidAf(const Skeleton& sk) {
                 boneCenter(p + "_thigh", p + "_shin"), 9, "*" + p + "_thigh -*" + p + "_shin");
         AfBody& shin = af.body(p + "_shin", p + "_shin", boneShape(p + "_shin", p + "_foot", 4.5),
                                boneCenter(p + "_shin", p + "_foot"), 5, "*" + p + "_shin -*" + p + "_foot");
-        shin.inertiaScale =
-            std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 2}; // more spin inertia: a steadier bone
-        af.body(p + "_foot", p + "_foot", shape(ShapeKind::Box, {-2.5, -1.8, -3}, {8, 1.8, 1}),
-                jointV(p + "_foot"), 2, "*" + p + "_foot")
+        shin.inertiaScale = std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 2}; // more spin inertia: a steadier bone
+        af.body(p + "_foot", p + "_foot", shape(ShapeKind::Box, {-2.5, -1.8, -3}, {8, 1.8, 1}), jointV(p + "_foot"), 2,
+                "*" + p + "_foot")
             .friction = BodyFriction{0.01, 0.01, 1};
     }
 
@@ -170,8 +165,7 @@ std::string humanoidAf(const Skeleton& sk) {
         const std::string p = side;
         const double sy = p == "l" ? 1 : -1;
         {
-            AfConstraint& c =
-                af.constraint(ConstraintType::Universal, p + "_shoulder", p + "_upperarm", "torso");
+            AfConstraint& c = af.constraint(ConstraintType::Universal, p + "_shoulder", p + "_upperarm", "torso");
             c.anchor = jointV(p + "_upperarm");
             c.shafts = std::array<AfVector, 2>{boneDir(p + "_upperarm", p + "_forearm"),
                                                boneDir(p + "_upperarm", p + "_forearm", true)};
@@ -180,8 +174,7 @@ std::string humanoidAf(const Skeleton& sk) {
         }
         {
             // Elbow: axis d × X (unit), so positive angles bring the hand forward; range [-5, 140] degrees.
-            AfConstraint& c =
-                af.constraint(ConstraintType::Hinge, p + "_elbow", p + "_forearm", p + "_upperarm");
+            AfConstraint& c = af.constraint(ConstraintType::Hinge, p + "_elbow", p + "_forearm", p + "_upperarm");
             c.anchor = jointV(p + "_forearm");
             c.axis = lit(0, -s45, -sy * s45);
             c.friction = 0.4;
@@ -195,8 +188,8 @@ std::string humanoidAf(const Skeleton& sk) {
         {
             AfConstraint& c = af.constraint(ConstraintType::Universal, p + "_hip", p + "_thigh", "pelvis");
             c.anchor = jointV(p + "_thigh");
-            c.shafts = std::array<AfVector, 2>{boneDir(p + "_thigh", p + "_shin"),
-                                               boneDir(p + "_thigh", p + "_shin", true)};
+            c.shafts =
+                std::array<AfVector, 2>{boneDir(p + "_thigh", p + "_shin"), boneDir(p + "_thigh", p + "_shin", true)};
             c.friction = 0.5;
             c.limit = ConeLimit{lit(0.5, sy * 0.15, -1), 110, std::nullopt};
         }
@@ -209,8 +202,7 @@ std::string humanoidAf(const Skeleton& sk) {
             c.limit = HingeLimit{0, 145, 67.5};
         }
         {
-            AfConstraint& c =
-                af.constraint(ConstraintType::BallAndSocket, p + "_ankle", p + "_foot", p + "_shin");
+            AfConstraint& c = af.constraint(ConstraintType::BallAndSocket, p + "_ankle", p + "_foot", p + "_shin");
             c.anchor = jointV(p + "_foot");
             c.friction = 0.5;
             c.limit = PyramidLimit{lit(1, 0, 0), 30, 70, 0, lit(1, 0, 0)};
@@ -231,9 +223,7 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
         animated[static_cast<std::size_t>(sk.index(p + "_shin"))] = QY;
         animated[static_cast<std::size_t>(sk.index(p + "_foot"))] = QY;
     }
-    auto aa = [](double deg, const Vector3d& axis) {
-        return Quaterniond(Eigen::AngleAxisd(deg * kDeg, axis));
-    };
+    auto aa = [](double deg, const Vector3d& axis) { return Quaterniond(Eigen::AngleAxisd(deg * kDeg, axis)); };
     std::vector<Pose> frames;
     for (int f = 0; f < numFrames; ++f) {
         const double phase = 2 * kPi * (f % 24) / 24.0;
@@ -248,8 +238,7 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
             const double knee = 5 + 45 * std::pow(std::max(0.0, std::cos(ph)), 2);
             pose.q[static_cast<std::size_t>(sk.index(p + "_thigh"))] = aa(thigh, Vector3d::UnitY());
             pose.q[static_cast<std::size_t>(sk.index(p + "_shin"))] = aa(knee, Vector3d::UnitY());
-            pose.q[static_cast<std::size_t>(sk.index(p + "_foot"))] =
-                aa(-0.6 * (thigh + knee), Vector3d::UnitY());
+            pose.q[static_cast<std::size_t>(sk.index(p + "_foot"))] = aa(-0.6 * (thigh + knee), Vector3d::UnitY());
             // Arms: lowered from the 45-degree rest to about 80 degrees, swinging against the legs.
             const Quaterniond lower = aa(-sy * 35, Vector3d::UnitX());
             pose.q[static_cast<std::size_t>(sk.index(p + "_upperarm"))] =
@@ -267,12 +256,11 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
 void writeHumanoid(Output& out) {
     const Skeleton sk = humanoidSkeleton();
     const std::vector<Mesh> meshes = humanoidMeshes(sk);
-    out.write(
-        "models/md5/humanoid/humanoid.md5mesh",
-        writeMd5Mesh(toMd5Mesh(sk, meshes, "afb_gen_content: humanoid (procedural tubes), MIT licensed")));
+    out.write("models/md5/humanoid/humanoid.md5mesh",
+              writeMd5Mesh(toMd5Mesh(sk, meshes, "afb_gen_content: humanoid (procedural tubes), MIT licensed")));
     out.write("models/md5/humanoid/af_pose.md5anim",
-              writeMd5Anim(afPoseAnim(
-                  sk, meshes, "afb_gen_content: humanoid af_pose (arms 45 degrees down, legs apart)")));
+              writeMd5Anim(
+                  afPoseAnim(sk, meshes, "afb_gen_content: humanoid af_pose (arms 45 degrees down, legs apart)")));
     out.write("models/md5/humanoid/walk.md5anim", humanoidWalk(sk, meshes));
     out.write("af/humanoid.af", humanoidAf(sk));
 }

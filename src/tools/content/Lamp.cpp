@@ -1,13 +1,13 @@
 // The lamp: a shade hanging from a hook in the world on three links (ball-and-socket and universal joints).
+#include <string>
+#include <vector>
+
 #include "AfBuilder.h"
 #include "Common.h"
 #include "Rig.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
-
-#include <string>
-#include <vector>
 
 namespace afb::gen {
 
@@ -34,8 +34,8 @@ void writeLamp(Output& out) {
          {sk.index("link3"), sk.index("link2"), 3, N, false, false});
     tube(m, sk, sk.pos("shade"), sk.pos("shade") - Vector3d(0, 0, 8), linear(2.5, 2.5, 8, 8),
          {sk.index("shade"), -1, 4, N, true, false});
-    tube(m, sk, sk.pos("bulb") + Vector3d(0, 0, 3), sk.pos("bulb") - Vector3d(0, 0, 1),
-         linear(1.5, 1.5, 1.2, 1.2), {sk.index("bulb"), -1, 3, N, true, true});
+    tube(m, sk, sk.pos("bulb") + Vector3d(0, 0, 3), sk.pos("bulb") - Vector3d(0, 0, 1), linear(1.5, 1.5, 1.2, 1.2),
+         {sk.index("bulb"), -1, 3, N, true, true});
     const std::vector<Mesh> meshes{m};
     out.write("models/md5/props/lamp/lamp.md5mesh",
               writeMd5Mesh(toMd5Mesh(sk, meshes, "afb_gen_content: a hanging lamp")));
@@ -44,14 +44,10 @@ void writeLamp(Output& out) {
 
     AfBuilder af("lamp", sk);
     af.settings("model_lamp", 8);
-    af.body("link1", "origin", boneShape("link1", "link2", 2.5), boneCenter("link1", "link2"), 1.5,
-            "*origin -*link2");
-    af.body("link2", "link2", boneShape("link2", "link3", 2.5), boneCenter("link2", "link3"), 1.5,
-            "*link2 -*link3");
-    af.body("link3", "link3", boneShape("link3", "shade", 2.5), boneCenter("link3", "shade"), 1.5,
-            "*link3 -*shade");
-    af.body("shade", "shade", shape(ShapeKind::Cylinder, {-8, -8, -8}, {8, 8, 0}, 10), jointV("shade"), 4,
-            "*shade");
+    af.body("link1", "origin", boneShape("link1", "link2", 2.5), boneCenter("link1", "link2"), 1.5, "*origin -*link2");
+    af.body("link2", "link2", boneShape("link2", "link3", 2.5), boneCenter("link2", "link3"), 1.5, "*link2 -*link3");
+    af.body("link3", "link3", boneShape("link3", "shade", 2.5), boneCenter("link3", "shade"), 1.5, "*link3 -*shade");
+    af.body("shade", "shade", shape(ShapeKind::Cylinder, {-8, -8, -8}, {8, 8, 0}, 10), jointV("shade"), 4, "*shade");
     {
         AfConstraint& c = af.constraint(ConstraintType::BallAndSocket, "hook", "link1", "world");
         c.anchor = jointV("link1");

@@ -1,14 +1,14 @@
 // The props figure: one body per trace-model shape type (box, octahedron, dodecahedron, cylinder, cone,
 // bone), each on its own joint, held together by springs.
+#include <string>
+#include <vector>
+
 #include "AfBuilder.h"
 #include "Common.h"
 #include "Rig.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
-
-#include <string>
-#include <vector>
 
 namespace afb::gen {
 
@@ -45,31 +45,28 @@ void writeProps(Output& out) {
     af.settings("model_props", 30);
     const Vector3d lo(-6, -6, -6), hi(6, 6, 6);
     af.body("box", "origin", shape(ShapeKind::Box, lo, hi), jointV("prop_box"), 5, "origin prop_box");
-    af.body("octahedron", "prop_octahedron", shape(ShapeKind::Octahedron, lo, hi), jointV("prop_octahedron"),
-            5, "*prop_octahedron");
-    af.body("dodecahedron", "prop_dodecahedron", shape(ShapeKind::Dodecahedron, lo, hi),
-            jointV("prop_dodecahedron"), 5, "*prop_dodecahedron");
+    af.body("octahedron", "prop_octahedron", shape(ShapeKind::Octahedron, lo, hi), jointV("prop_octahedron"), 5,
+            "*prop_octahedron");
+    af.body("dodecahedron", "prop_dodecahedron", shape(ShapeKind::Dodecahedron, lo, hi), jointV("prop_dodecahedron"), 5,
+            "*prop_dodecahedron");
     af.body("cylinder", "prop_cylinder", shape(ShapeKind::Cylinder, {-5, -5, -6}, {5, 5, 6}, 10),
             jointV("prop_cylinder"), 5, "*prop_cylinder");
     // A cone's apex is at its origin and it extends 12 units down to its base.
     af.body("cone", "prop_cone", shape(ShapeKind::Cone, {-6, -6, 0}, {6, 6, 12}, 12), jointV("prop_cone"), 5,
             "*prop_cone");
-    af.body("bone", "prop_bone", boneShape("prop_bone", "prop_bone_tip", 4),
-            boneCenter("prop_bone", "prop_bone_tip"), 5, "*prop_bone");
+    af.body("bone", "prop_bone", boneShape("prop_bone", "prop_bone_tip", 4), boneCenter("prop_bone", "prop_bone_tip"),
+            5, "*prop_bone");
     const std::vector<std::pair<std::string, std::string>> links{{"octahedron", "box"},
                                                                  {"dodecahedron", "octahedron"},
                                                                  {"cylinder", "dodecahedron"},
                                                                  {"cone", "cylinder"},
                                                                  {"bone", "cone"}};
-    auto jointOf = [](const std::string& body) {
-        return body == "box" ? std::string("prop_box") : "prop_" + body;
-    };
+    auto jointOf = [](const std::string& body) { return body == "box" ? std::string("prop_box") : "prop_" + body; };
     for (const auto& [b1, b2] : links) {
         const Vector3d p1 = b1 == "bone" ? Vector3d(0, 100, 4) : sk.pos(jointOf(b1));
         const Vector3d p2 = sk.pos(jointOf(b2));
         const double rest = (p2 - p1).norm();
-        af.spring(b2 + "_" + b1, b1, b2,
-                  b1 == "bone" ? boneCenter("prop_bone", "prop_bone_tip") : jointV(jointOf(b1)),
+        af.spring(b2 + "_" + b1, b1, b2, b1 == "bone" ? boneCenter("prop_bone", "prop_bone_tip") : jointV(jointOf(b1)),
                   jointV(jointOf(b2)), rest, 0.6 * rest, 1.5 * rest);
     }
     out.write("af/props.af", writeAf(af.decl));

@@ -1,10 +1,10 @@
 #include "Rig.h"
 
-#include "Common.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "Common.h"
 
 namespace afb::gen {
 
@@ -25,8 +25,7 @@ Vector3d md5Quat(Quaterniond q) {
 }
 
 /// Bounds of the skinned meshes in `pose` (forward kinematics, then the weights).
-std::pair<Vector3d, Vector3d> skinnedBounds(const Skeleton& sk, const std::vector<Mesh>& meshes,
-                                            const Pose& pose) {
+std::pair<Vector3d, Vector3d> skinnedBounds(const Skeleton& sk, const std::vector<Mesh>& meshes, const Pose& pose) {
     std::vector<Eigen::Matrix3d> R(sk.joints.size());
     std::vector<Vector3d> P(sk.joints.size());
     for (std::size_t i = 0; i < sk.joints.size(); ++i) {
@@ -70,9 +69,7 @@ int Skeleton::index(const std::string& name) const {
     throw std::runtime_error("no joint " + name);
 }
 
-Vector3d Skeleton::pos(const std::string& name) const {
-    return joints[static_cast<std::size_t>(index(name))].pos;
-}
+Vector3d Skeleton::pos(const std::string& name) const { return joints[static_cast<std::size_t>(index(name))].pos; }
 
 int Mesh::vertex(const Skeleton& sk, Vector3d p, double s, double t,
                  const std::vector<std::pair<int, double>>& influences) {
@@ -81,8 +78,7 @@ int Mesh::vertex(const Skeleton& sk, Vector3d p, double s, double t,
     v.t = t;
     v.firstWeight = static_cast<int>(weights.size());
     // Bind orientations are the identity, so a weight's offset R_jointᵀ(p − p_joint) is simply p − p_joint.
-    for (const auto& [j, b] : influences)
-        weights.push_back({j, b, p - sk.joints[static_cast<std::size_t>(j)].pos});
+    for (const auto& [j, b] : influences) weights.push_back({j, b, p - sk.joints[static_cast<std::size_t>(j)].pos});
     v.count = static_cast<int>(influences.size());
     verts.push_back(v);
     return static_cast<int>(verts.size()) - 1;
@@ -92,8 +88,7 @@ TubeRadius linear(double ru0, double rv0, double ru1, double rv1) {
     return [=](double t) { return Eigen::Vector2d(ru0 + (ru1 - ru0) * t, rv0 + (rv1 - rv0) * t); };
 }
 
-void tube(Mesh& m, const Skeleton& sk, Vector3d a, Vector3d b, const TubeRadius& radius,
-          const TubeSpec& spec) {
+void tube(Mesh& m, const Skeleton& sk, Vector3d a, Vector3d b, const TubeRadius& radius, const TubeSpec& spec) {
     const int rings = spec.rings, sides = spec.sides;
     const Vector3d d = (b - a).normalized();
     const Vector3d ref = std::abs(d.z()) > 0.7 ? Vector3d::UnitX() : Vector3d::UnitZ();
@@ -145,8 +140,7 @@ void boxMesh(Mesh& m, const Skeleton& sk, Vector3d lo, Vector3d hi, int joint) {
         const Vector3d p((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
         m.vertex(sk, p, (i & 1) ? 1 : 0, (i & 2) ? 1 : 0, {{joint, 1.0}});
     }
-    static const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                    {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    static const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (const auto& f : faces) {
         m.tris.push_back({first + f[0], first + f[1], first + f[2]});
         m.tris.push_back({first + f[0], first + f[2], first + f[3]});
@@ -210,8 +204,7 @@ decl::Md5Anim toMd5Anim(const Skeleton& sk, const std::vector<Mesh>& meshes, con
     return out;
 }
 
-decl::Md5Anim afPoseAnim(const Skeleton& sk, const std::vector<Mesh>& meshes,
-                         const std::string& commandline) {
+decl::Md5Anim afPoseAnim(const Skeleton& sk, const std::vector<Mesh>& meshes, const std::string& commandline) {
     return toMd5Anim(sk, meshes, {bindPose(sk)}, std::vector<int>(sk.joints.size(), 0), 24, commandline);
 }
 

@@ -1,23 +1,23 @@
 #pragma once
 // Procedural rigs for afb_gen_content: a skeleton with identity bind orientations, meshes skinned to it built
 // from tubes and boxes, and poses; turned into decl::Md5Mesh / decl::Md5Anim values for the md5 writers.
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
-
-#include <Eigen/Geometry>
 #include <array>
 #include <functional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <Eigen/Geometry>
+
+#include "afb/decl/Md5Anim.h"
+#include "afb/decl/Md5Mesh.h"
+
 namespace afb::gen {
 
 struct Joint {
     std::string name;
     int parent = -1;
-    Eigen::Vector3d pos =
-        Eigen::Vector3d::Zero(); ///< model space, bind pose (all bind orientations are identity)
+    Eigen::Vector3d pos = Eigen::Vector3d::Zero(); ///< model space, bind pose (all bind orientations are identity)
 };
 
 struct Skeleton {
