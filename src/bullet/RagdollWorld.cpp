@@ -83,11 +83,9 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
 }
 
 // After each substep's integration (Bullet runs actions then), the position pass over every ragdoll.
-class RagdollWorld::PositionAction : public btActionInterface, public detail::MovableTest {
+class RagdollWorld::PositionAction : public btActionInterface {
   public:
     explicit PositionAction(RagdollWorld& owner) : m_owner(owner) {}
-
-    bool movable(const btCollisionObject* o) const override { return owner(o) >= 0; }
 
     void updateAction(btCollisionWorld* world, btScalar dt) override {
         if (m_owner.m_ragdolls.empty()) return;
@@ -137,7 +135,7 @@ class RagdollWorld::PositionAction : public btActionInterface, public detail::Mo
         for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
             Ragdoll& r = *m_owner.m_ragdolls[k];
             if (r.atRest()) continue;
-            for (int it = 0; it < iterations; ++it) detail::positionSweep(r, m_contacts[k], *this);
+            detail::positionPass(r, iterations, m_contacts[k]);
         }
     }
     void debugDraw(btIDebugDraw*) override {}

@@ -81,6 +81,11 @@ class Ragdoll {
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
     /// space now; at spawn the two coincide.
     std::pair<btTransform, btTransform> constraintFramesWorld(int i) const;
+    /// The constraint frame of figure constraint `i` in body1's frame, and in body2's frame (or in the world
+    /// for a world constraint), in Bullet's precision; fixed at spawn.
+    const std::pair<btTransform, btTransform>& constraintFramesLocal(int i) const {
+        return m_frames[static_cast<std::size_t>(i)];
+    }
 
     /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
     struct JointError {
@@ -132,7 +137,8 @@ class Ragdoll {
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
-    std::vector<btTypedConstraint*> m_main;                        ///< per figure constraint
+    std::vector<btTypedConstraint*> m_main;
+    std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal                        ///< per figure constraint
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
 };
