@@ -8,6 +8,7 @@
 
 #include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 
 namespace afb::bullet {
@@ -37,6 +38,15 @@ struct SpawnOptions {
     /// Ragdoll::engineContactFriction() says whether it is.
     bool engineContactFriction = true;
 };
+
+/// Spawn options that carry what the loaded entity asks for: its "nodrop"/"sleep" flag as startAtRest, and
+/// `method`. Set the entity transform and collision filter on the result.
+inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Method& method = {}) {
+    SpawnOptions options;
+    options.method = method;
+    options.startAtRest = loaded.startAtRest;
+    return options;
+}
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
