@@ -26,7 +26,6 @@ constexpr btScalar kContactFraction = btScalar(0.5);
 constexpr btScalar kAnchorToleranceM = btScalar(1e-4);
 constexpr btScalar kAngleToleranceRad = btScalar(2e-4);
 
-
 // One body as the pass sees it: immovable (world, static geometry, another figure's or a game's body) or a body
 // of this ragdoll, whose pose the pass works on locally and writes back once, at the end of the pass.
 struct Side {

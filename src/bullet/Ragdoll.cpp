@@ -283,7 +283,8 @@ std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const 
     const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
     const auto& [fa, fb] = m_frames[static_cast<std::size_t>(i)];
     const btTransform a = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * fa;
-    const btTransform b = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * fb : fb;
+    const btTransform b =
+        c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * fb : fb;
     return {a, b};
 }
 

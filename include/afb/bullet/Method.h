@@ -70,7 +70,7 @@ struct Method {
     /// Speculative limits: a limit row exists before the limit is reached and lets the joint close only the gap
     /// that remains in this step (Box2D v3's joint limits), instead of a row that appears after the overshoot.
     /// Cone and hinge limits then use afbullet's own rows instead of btConeTwist's and btHinge's.
-    bool speculativeLimits = false;
+    bool speculativeLimits = true;
     /// Continuous collision policy.
     CcdPolicy ccd = CcdPolicy::FastBodies;
 

@@ -148,7 +148,8 @@ class Ragdoll {
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
     std::vector<btTypedConstraint*> m_main;
-    std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal                        ///< per figure constraint
+    std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
+                                                               ///< ///< per figure constraint
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
 };
