@@ -4,6 +4,7 @@
 //
 //   text::Diagnostics            every message as file:line:col: error|warning: text
 //   decl::Library                a content folder (af/, def/, models/) and entity resolution
+//   decl::parseAf                an .af text parsed in memory
 //   figure::loadEntityFigure     an entity's figure in SI units, with the engine's meaning and findings
 //   figure::bodyStatesFromAnimation  body poses and velocities from an md5anim time (start from an animation)
 //   figure::bodiesFromJoints     body placements from any md5 pose
@@ -16,6 +17,7 @@
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Load.h"
