@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "EntityFixture.h"
 #include "TestSupport.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
@@ -20,15 +21,7 @@ namespace {
 using afb::figure::BodyState;
 using afb::figure::Transform;
 
-afb::figure::LoadedFigure loadEntity(const std::string& entity) {
-    afb::text::Diagnostics diags;
-    std::optional<afb::figure::LoadedFigure> loaded;
-    if (auto lib = afb::decl::Library::open(afb::test::sourceDir(), diags))
-        loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
-    INFO(diags.str());
-    REQUIRE(loaded);
-    return std::move(*loaded);
-}
+using afb::test::loadEntity;
 
 afb::decl::Md5Anim loadAnim(const std::string& name) {
     afb::text::Diagnostics diags;
