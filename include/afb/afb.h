@@ -16,6 +16,7 @@
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/bullet/RagdollSolver.h"
 #include "afb/bullet/RagdollWorld.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"

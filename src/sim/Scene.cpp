@@ -7,8 +7,7 @@ namespace afb::sim {
 Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
     : m_method(method), m_config(std::make_unique<btDefaultCollisionConfiguration>()),
       m_dispatcher(std::make_unique<btCollisionDispatcher>(m_config.get())),
-      m_broadphase(std::make_unique<btDbvtBroadphase>()),
-      m_solver(std::make_unique<btSequentialImpulseConstraintSolver>()),
+      m_broadphase(std::make_unique<btDbvtBroadphase>()), m_solver(std::make_unique<bullet::RagdollSolver>()),
       m_world(std::make_unique<btDiscreteDynamicsWorld>(m_dispatcher.get(), m_broadphase.get(), m_solver.get(),
                                                         m_config.get())) {
     m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));

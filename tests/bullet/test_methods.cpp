@@ -186,3 +186,132 @@ TEST_CASE("multipoint and speculative contacts: a falling box stops at the groun
     CHECK(peakDepth(methodWith("multipoint-contacts", "on")) > 0.01); // found too late, inside the ground
     CHECK(peakDepth(both) < 0.005);
 }
+
+TEST_CASE("vertex contacts: a box's manifold holds the corners it rests and rolls on", "[bullet][methods]") {
+    // A 16 × 16 × 8-unit box (0.406 × 0.406 × 0.203 m). Lying flat on the ground, its four bottom corners are
+    // the contact points, at distance 0. Tilted by 10° about X onto one bottom edge, the two corners of that edge
+    // touch and the two of the far bottom edge are w·sin 10° = 70.5 mm up: with a speculative reach that long,
+    // those are the next two points, so the solver can stop the box's roll onto its face.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
+                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
+                                                  "0, 4 ) density 0.02 }\n}\n",
+                                                  joints);
+    REQUIRE(built.figure);
+    const double half = 8 * kUnit, halfHeight = 4 * kUnit, tilt = 10 * kDeg;
+    auto manifoldAt = [&](const btTransform& pose, btScalar reach) {
+        afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
+        auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        r.body(0).setCenterOfMassTransform(pose);
+        scene.world().performDiscreteCollisionDetection(); // creates the pair's manifold
+        btDispatcher* d = scene.world().getDispatcher();
+        REQUIRE(d->getNumManifolds() == 1);
+        d->getManifoldByIndexInternal(0)->setContactBreakingThreshold(reach);
+        scene.world().performDiscreteCollisionDetection();
+        std::vector<std::pair<btVector3, double>> points; // (world point on the box, distance)
+        const btPersistentManifold* m = d->getManifoldByIndexInternal(0);
+        for (int i = 0; i < m->getNumContacts(); ++i)
+            points.emplace_back(m->getContactPoint(i).getPositionWorldOnA(), m->getContactPoint(i).getDistance());
+        return points;
+    };
+    SECTION("flat") {
+        const auto points =
+            manifoldAt(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, btScalar(halfHeight))), btScalar(0.02));
+        REQUIRE(points.size() == 4);
+        for (const auto& [p, distance] : points) {
+            CHECK(std::abs(distance) < 1e-5);
+            CHECK(std::abs(std::abs(p.x()) - half) < 1e-5);
+            CHECK(std::abs(std::abs(p.y()) - half) < 1e-5);
+        }
+    }
+    SECTION("on an edge") {
+        // Rotated about X by 10°: the bottom edge at y = −half (rotated) is lowest; place it on the ground.
+        const btQuaternion q(btVector3(1, 0, 0), btScalar(tilt));
+        const btMatrix3x3 r(q);
+        const btVector3 lowest = r * btVector3(0, btScalar(-half), btScalar(-halfHeight));
+        const auto points = manifoldAt(btTransform(q, btVector3(0, 0, -lowest.z())), btScalar(0.3));
+        REQUIRE(points.size() == 4);
+        int touching = 0, far = 0;
+        for (const auto& [p, distance] : points) {
+            if (std::abs(distance) < 1e-5) ++touching;
+            else if (std::abs(distance - 2 * half * std::sin(tilt)) < 1e-5) ++far;
+        }
+        CHECK(touching == 2);
+        CHECK(far == 2);
+    }
+}
+
+TEST_CASE("vertex contacts: a box slapping down onto its face stops at the ground", "[bullet][methods]") {
+    // The box balanced on a bottom edge at 30°, turning onto its face at 40 rad/s: its far edge comes down at
+    // about ω·w = 16 m/s, 27 cm per step at 60 Hz. At 30° the corners of the side face are nearer the ground
+    // than those of the far edge, so only a choice that looks at where the corners go in this step keeps the
+    // far edge among the manifold's four points and stops it at the ground.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
+                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
+                                                  "0, 4 ) density 0.02 }\n}\n",
+                                                  joints);
+    REQUIRE(built.figure);
+    auto peakDepth = [&](bool vertexContacts) {
+        Method m = methodWith("speculative-contacts", "on");
+        m.multipointContacts = vertexContacts;
+        afb::sim::Scene scene(m);
+        auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        const btQuaternion q(btVector3(1, 0, 0), btScalar(30 * kDeg));
+        const btVector3 lowest = btMatrix3x3(q) * btVector3(0, btScalar(-8 * kUnit), btScalar(-4 * kUnit));
+        r.body(0).setCenterOfMassTransform(btTransform(q, btVector3(0, 0, -lowest.z())));
+        r.body(0).setAngularVelocity(btVector3(-40, 0, 0)); // turning the far (+y) edge down
+        double worst = 0;
+        for (int i = 0; i < 30; ++i) {
+            scene.step(1.0 / 60.0);
+            worst = std::max(worst, scene.deepestContact().depthM);
+        }
+        return worst;
+    };
+    const double bullet = peakDepth(false), vertex = peakDepth(true);
+    INFO("Bullet's plane contacts " << bullet << " m, vertex contacts " << vertex << " m");
+    CHECK(vertex < 0.005);
+    CHECK(vertex < bullet);
+}
+
+TEST_CASE("joint warm starting: a hanging chain carries its weight without sagging", "[bullet][methods]") {
+    // Three 10 kg links hang straight down from the world, at rest in their equilibrium: every joint must carry
+    // the weight below it, m·g·dt per step. Bullet starts joint rows
+    // from zero each step, so two iterations rebuild only part of that impulse along the chain and the joints
+    // sag apart; started from their last impulses (factor 1), the rows carry the load and the chain holds.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 100},
+                                                      {"b", 0, 0, 0, 80},
+                                                      {"c", 1, 0, 0, 60}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure chain {\n settings { selfCollision 0 }\n"
+        " body \"a\" { joint \"origin\" model box( ( -1, -1, -20 ), ( 1, 1, 0 ) ) origin ( 0, 0, 90 ) density 0.125 "
+        "containedJoints \"origin\" }\n"
+        " body \"b\" { joint \"b\" model box( ( -1, -1, -20 ), ( 1, 1, 0 ) ) origin ( 0, 0, 70 ) density 0.125 "
+        "containedJoints \"b\" }\n"
+        " body \"c\" { joint \"c\" model box( ( -1, -1, -20 ), ( 1, 1, 0 ) ) origin ( 0, 0, 50 ) density 0.125 "
+        "containedJoints \"c\" }\n"
+        " ballAndSocketJoint \"top\" { body1 \"a\" body2 \"world\" anchor ( 0, 0, 100 ) friction 0 }\n"
+        " ballAndSocketJoint \"ab\" { body1 \"b\" body2 \"a\" anchor ( 0, 0, 80 ) friction 0 }\n"
+        " ballAndSocketJoint \"bc\" { body1 \"c\" body2 \"b\" anchor ( 0, 0, 60 ) friction 0 }\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    auto worstSag = [&](bool warm) {
+        Method m = legacy();
+        m.iterations = m.jointIterations = 2;
+        m.warmStartingFactor = 1; // the steady state's impulses, in full
+        m.jointWarmStarting = warm;
+        ArmScene s(*built.figure, m, 9.81);
+        double worst = 0;
+        for (int i = 0; i < 120; ++i) {
+            s.scene.step(1.0 / 60.0);
+            if (i >= 60)
+                for (int c = 0; c < 3; ++c) worst = std::max(worst, s.anchorError(c));
+        }
+        return worst;
+    };
+    const double cold = worstSag(false), warm = worstSag(true);
+    INFO("cold " << cold << " m, warm " << warm << " m");
+    CHECK(cold > 5e-3); // 16 mm here
+    CHECK(warm < 1e-4);
+}

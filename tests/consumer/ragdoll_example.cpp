@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     btDefaultCollisionConfiguration config;
     btCollisionDispatcher dispatcher(&config);
     btDbvtBroadphase broadphase;
-    btSequentialImpulseConstraintSolver solver;
+    afb::bullet::RagdollSolver solver; // Bullet's solver, plus warm-started ragdoll joints (any solver works)
     btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
     world.setGravity(btVector3(0, 0, btScalar(-figure.units.gravityMps2)));
     btStaticPlaneShape groundShape(btVector3(0, 0, 1), 0);

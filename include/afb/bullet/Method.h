@@ -34,6 +34,11 @@ struct Method {
     int substeps = 1;
     /// Sequential-impulse iterations of the world's solver (contacts, and joints without their own count).
     int iterations = 20;
+    /// The solver stops iterating early once no row's velocity changes by more than sqrt(this) in an iteration
+    /// (the largest squared change, m²/s² or rad²/s²; btContactSolverInfo::m_leastSquaresResidualThreshold).
+    /// 0: always run every iteration. A converged step (free fall, rest, warm-started load) then costs a few
+    /// iterations, and an impact gets them all.
+    double solverTolerance = 0;
     /// Bullet's split impulse: contact penetration is recovered by a separate position-only impulse that adds
     /// no velocity (no bounce out of the ground); off, penetration is recovered by Baumgarte velocity.
     bool splitImpulse = true;
@@ -42,7 +47,8 @@ struct Method {
     /// Error reduction per step of Bullet's joint rows (btContactSolverInfo::m_erp): anchor separation and
     /// locked axes of point-to-point, hinge, cone-twist, slider and fixed constraints.
     double jointErp = 0.2;
-    /// Warm starting: each contact and joint row starts from a fraction of its last impulse.
+    /// Warm starting: each contact row starts from a fraction of its last impulse (joint rows too where
+    /// jointWarmStarting is on; Bullet itself starts them from zero).
     bool warmStarting = true;
     /// That fraction (btContactSolverInfo::m_warmstartingFactor).
     double warmStartingFactor = 0.85;
@@ -73,6 +79,12 @@ struct Method {
     bool speculativeLimits = true;
     /// Continuous collision policy.
     CcdPolicy ccd = CcdPolicy::FastBodies;
+    /// Warm-started joint rows: every row of the figure's joints and joint friction (not of its limits) starts
+    /// from the warm-starting factor times its last impulse, as contacts do, instead of from zero (Bullet's solver
+    /// rebuilds a joint's impulse from nothing every substep, so a figure carrying its weight sags at its joints and
+    /// limits). Needs the world's solver to be a RagdollSolver (sim::Scene's is); with any other solver it has no
+    /// effect.
+    bool jointWarmStarting = true;
 
     friend bool operator==(const Method&, const Method&) = default;
 };

@@ -87,6 +87,9 @@ class Ragdoll {
     const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths).
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
+    /// Bullet constraint `k` of those, in the order they were added to the world.
+    btTypedConstraint& bulletConstraint(int k) { return *m_constraints[static_cast<std::size_t>(k)]; }
+    const btTypedConstraint& bulletConstraint(int k) const { return *m_constraints[static_cast<std::size_t>(k)]; }
 
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
     /// space now; at spawn the two coincide.

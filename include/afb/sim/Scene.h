@@ -9,6 +9,7 @@
 
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollSolver.h"
 #include "afb/bullet/RagdollWorld.h"
 
 namespace afb::sim {
@@ -57,7 +58,7 @@ class Scene {
     std::unique_ptr<btDefaultCollisionConfiguration> m_config;
     std::unique_ptr<btCollisionDispatcher> m_dispatcher;
     std::unique_ptr<btBroadphaseInterface> m_broadphase;
-    std::unique_ptr<btSequentialImpulseConstraintSolver> m_solver;
+    std::unique_ptr<bullet::RagdollSolver> m_solver;
     std::unique_ptr<btDiscreteDynamicsWorld> m_world;
     std::unique_ptr<btCollisionShape> m_groundShape;
     std::unique_ptr<btRigidBody> m_ground;

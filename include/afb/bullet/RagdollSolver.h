@@ -1,0 +1,42 @@
+#pragma once
+// Bullet's sequential-impulse solver, with warm starting for the rows of the constraints it is told to track.
+//
+// Bullet warm-starts contacts (each point starts from a fraction of its last impulse) but starts every joint row
+// from zero on every substep (btSequentialImpulseConstraintSolver::convertJoint). A ragdoll lying on the ground
+// carries its own weight through its joints and limits, and the solver's iterations must rebuild those impulses
+// along the chain every step; what they fail to rebuild shows as joints that sag apart and limits that give.
+// This solver starts each tracked row from the world's warm-starting factor times its last impulse, as Bullet
+// does for contacts (README: Methods).
+#include <unordered_map>
+#include <vector>
+
+#include <btBulletDynamicsCommon.h>
+
+namespace afb::bullet {
+
+/// A drop-in replacement for btSequentialImpulseConstraintSolver (world.setConstraintSolver, or pass it to
+/// btDiscreteDynamicsWorld's constructor). Untracked constraints and contacts are solved exactly as Bullet does.
+/// RagdollWorld tracks the joint and friction constraints of the ragdolls spawned through it when their method
+/// asks for joint warm starting (not their limit constraints, whose speculative rows must start from zero); a
+/// row set is warm-started only when the constraint has as many rows as on the last step it was solved (a
+/// Bullet limit that engages or releases starts its rows from zero). One world, one thread.
+class RagdollSolver : public btSequentialImpulseConstraintSolver {
+  public:
+    /// Warm-start `constraint`'s rows from now on (until untrack).
+    void track(const btTypedConstraint& constraint);
+    /// Forget `constraint` (call before it is destroyed).
+    void untrack(const btTypedConstraint& constraint);
+    /// How many constraints are tracked.
+    std::size_t trackedCount() const { return m_rows.size(); }
+
+  protected:
+    void convertJoints(btTypedConstraint** constraints, int numConstraints,
+                       const btContactSolverInfo& infoGlobal) override;
+    btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
+                                           const btContactSolverInfo& infoGlobal) override;
+
+  private:
+    std::unordered_map<const btTypedConstraint*, std::vector<btScalar>> m_rows; ///< last impulse of every row
+};
+
+} // namespace afb::bullet
