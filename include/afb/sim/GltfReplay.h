@@ -19,10 +19,11 @@
 //     P: (x, y, z)_Doom ↦ (y, z, x)_glTF,
 // so Doom's up (+Z) is glTF's up (+Y), Doom's forward (+X) is glTF's forward (+Z) and Doom's left (+Y) is glTF's +X.
 //
-// Skinning: glTF blends whole joint transforms with at most four weights per vertex (linear blend skinning); md5 gives
-// every weight its own offset (af-format §7.3). The bind vertex is the md5 vertex in the bind pose, and each vertex
-// keeps its four largest joint weights (weights on one joint summed), renormalised: exact for vertices on one joint,
-// the usual md5-to-glTF approximation for blended ones. The joint nodes themselves are exact (driveSkeleton).
+// Skinning: glTF blends at most four joint transforms about one bind-pose vertex (linear blend skinning); md5 gives
+// every weight its own offset (af-format §7.3). The bind vertex is the md5 vertex in the md5mesh bind pose, and each
+// vertex keeps its four largest joint weights (weights on one joint summed), renormalised. That is exact for every
+// vertex with at most four weights whose offsets are one bind-pose point seen from each joint (as exporters write
+// them), and an approximation otherwise. The joint nodes themselves are exact (driveSkeleton).
 #include <filesystem>
 #include <optional>
 #include <string>
