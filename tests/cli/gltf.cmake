@@ -6,13 +6,7 @@
 file(REMOVE_RECURSE ${TMP})
 file(MAKE_DIRECTORY ${TMP})
 
-function(run expected)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${ARGN}\n${out}${err}")
-  if(NOT rc STREQUAL expected)
-    message(FATAL_ERROR "exit code ${rc}, expected ${expected}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run.cmake)
 
 set(files)
 foreach(entity IN ITEMS humanoid chain props)
