@@ -1,4 +1,5 @@
 // afb drop: drop figures onto a ground plane and report speed, accuracy and stability.
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -9,6 +10,7 @@
 #include "MethodOptions.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Drop.h"
+#include "afb/sim/GltfReplay.h"
 #include "afb/sim/Report.h"
 
 namespace afb::cli {
@@ -25,6 +27,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         std::optional<int> steps;
         std::string precision;
         std::string json, csv;
+        std::filesystem::path gltf;
         double gravity = 9.81;
         bool doomGravity = false, noSleep = false;
     };
@@ -49,6 +52,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
     cmd->add_flag("--doom-gravity", opt->doomGravity, "Doom's gravity, 1066 units/s² (27.1 m/s²), instead of 9.81");
     cmd->add_option("--json", opt->json, "Write the results as JSON to this file ('-': stdout)");
     cmd->add_option("--csv", opt->csv, "Write the results (without final_pose) as CSV to this file");
+    cmd->add_option("--gltf", opt->gltf,
+                    "Record the first instance as a glTF 2.0 binary (FILE.glb, one entity): the skinned md5 mesh, "
+                    "its skeleton, the body hulls, the ground and one animation at the step rate; metres, Y up");
     cmd->callback([opt, &exitCode, argc, argv] {
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
             // The two Bullet builds cannot share a process: run the sibling binary built against the other one.
@@ -68,6 +74,18 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             exitCode = 1;
             return;
         }
+        if (!opt->gltf.empty()) {
+            std::string ext = opt->gltf.extension().string();
+            for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            const char* problem = ext != ".glb"               ? "--gltf must name a .glb file"
+                                  : opt->entities.size() != 1 ? "--gltf records one entity: give exactly one"
+                                                              : nullptr;
+            if (problem) {
+                std::cerr << "afb drop: " << problem << "\n";
+                exitCode = 1;
+                return;
+            }
+        }
         opt->drop.method = *method;
         opt->drop.seed = opt->seed;
         opt->drop.steps = opt->steps;
@@ -77,6 +95,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         text::Diagnostics diags;
         auto lib = decl::Library::open(opt->base, diags);
         std::vector<sim::DropResult> results;
+        std::vector<std::string> replays; // what --gltf wrote, printed after the table
         std::printf("afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
                     sim::bulletVersion().c_str(), sim::bulletPrecision(), opt->drop.hz,
                     opt->drop.sleeping ? "on" : "off", units.gravityMps2, bullet::describe(opt->drop.method).c_str());
@@ -90,7 +109,27 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             if (::isatty(STDERR_FILENO)) std::fprintf(stderr, "  dropping %s x %d ...\r", e.c_str(), opt->drop.count);
             sim::DropOptions drop = opt->drop;
             drop.startAtRest = loaded->startAtRest; // "nodrop"/"sleep" entities hang until touched
-            results.push_back(sim::runDrop(loaded->figure, drop));
+            sim::DropRecording recording;
+            sim::DropObserver observer;
+            if (!opt->gltf.empty()) observer = sim::recordInto(recording, drop.hz);
+            results.push_back(sim::runDrop(loaded->figure, drop, observer));
+            if (!opt->gltf.empty()) {
+                const sim::GltfReplayResult written =
+                    sim::writeGltfReplay(loaded->figure, loaded->mesh, recording, opt->gltf);
+                if (written.error) {
+                    std::cerr << "afb drop: --gltf: " << *written.error << "\n";
+                    exitCode = 1;
+                    continue;
+                }
+                char line[512];
+                std::snprintf(line, sizeof line,
+                              "afb drop: replay of %s (first instance: %d frames at %g Hz, %d joints, %d bodies) -> %s",
+                              e.c_str(), written.frames, drop.hz, written.joints, written.bodies, opt->gltf.c_str());
+                replays.push_back(line);
+                if (written.framesDropped > 0)
+                    replays.push_back("afb drop: warning: the replay stops where the pose stopped being finite (" +
+                                      std::to_string(written.framesDropped) + " frames left out)");
+            }
         }
         std::fflush(stdout);
         printDiagnostics(diags);
@@ -111,6 +150,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                             r.worstAnchorJoint.empty() ? "-" : r.worstAnchorJoint.c_str(),
                             r.worstLimitJoint.empty() ? "-" : r.worstLimitJoint.c_str(),
                             r.worstContact.empty() ? "-" : r.worstContact.c_str());
+        for (const std::string& line : replays) std::printf("%s\n", line.c_str());
         nlohmann::json all = {{"bullet", sim::bulletVersion()},
                               {"precision", sim::bulletPrecision()},
                               {"gravity_mps2", units.gravityMps2},

@@ -68,8 +68,9 @@ std::string contactName(Scene& scene, const ContactDepth& c) {
     return objectName(scene, c.a) + " / " + objectName(scene, c.b);
 }
 
+// `observer` (first world only, may be null) sees the first instance at spawn and after every step.
 Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOptions& o,
-                 const std::vector<btTransform>& spawns, bool holdsFirst, int steps) {
+                 const std::vector<btTransform>& spawns, bool holdsFirst, int steps, const DropObserver* observer) {
     Partial out;
     const double g = asset->figure().units.gravityMps2;
     Scene scene(o.method, SceneSettings{g, true, 1.0});
@@ -82,6 +83,8 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
     }
     const auto& dolls = scene.ragdolls();
     out.restTimes.assign(dolls.size(), -1);
+    if (dolls.empty()) observer = nullptr;
+    if (observer) (*observer)(0, dolls[0]->bodyTransforms());
 
     auto totalEnergy = [&] {
         double e = 0;
@@ -96,6 +99,7 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
         out.stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const double now = (step + 1) / o.hz;
         ++out.r.steps;
+        if (observer) (*observer)(step + 1, dolls[0]->bodyTransforms());
 
         bool allRest = true;
         for (std::size_t k = 0; k < dolls.size(); ++k) {
@@ -151,7 +155,7 @@ std::string bulletVersion() {
 
 const char* bulletPrecision() { return sizeof(btScalar) == sizeof(double) ? "double" : "float"; }
 
-DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
+DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const DropObserver& observer) {
     const auto asset = RagdollAsset::create(figure);
     const int count = std::max(1, o.count);
     const int worlds = std::clamp(o.worlds, 1, count);
@@ -190,9 +194,9 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
         for (int w = 1; w < worlds; ++w)
             threads.emplace_back([&, w] {
                 parts[static_cast<std::size_t>(w)] =
-                    runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps);
+                    runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps, nullptr);
             });
-        parts[0] = runWorld(asset, o, perWorld[0], true, steps);
+        parts[0] = runWorld(asset, o, perWorld[0], true, steps, observer ? &observer : nullptr);
         for (std::thread& t : threads) t.join();
     }
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

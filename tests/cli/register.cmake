@@ -66,6 +66,21 @@ afb_cli_test(draw_bad_extension 1 ARGS draw --base . chain --out ${CMAKE_CURRENT
 afb_cli_test(draw_unknown 1 ARGS draw --base . no_such_entity --out ${CMAKE_CURRENT_BINARY_DIR}/none.png
              MATCH "no_such_entity")
 
+# afb drop --gltf: replays that the Khronos glTF validator passes with zero errors (skipped without node and the
+# validator, except under CI), and the option's own errors.
+find_program(AFB_NODE node)
+add_test(NAME cli.drop_gltf
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DAFB_DOUBLE=$<TARGET_FILE:afb-double>" "-DNODE=${AFB_NODE}"
+          "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/drop_gltf"
+          -P ${CMAKE_CURRENT_LIST_DIR}/gltf.cmake)
+set_tests_properties(cli.drop_gltf PROPERTIES SKIP_REGULAR_EXPRESSION "validation skipped")
+afb_cli_test(drop_gltf_extension 1 ARGS drop --base . chain --steps 1 --gltf ${CMAKE_CURRENT_BINARY_DIR}/chain.gltf
+             MATCH "--gltf must name a .glb file")
+afb_cli_test(drop_gltf_one_entity 1 ARGS drop --base . chain humanoid --steps 1
+             --gltf ${CMAKE_CURRENT_BINARY_DIR}/two.glb MATCH "--gltf records one entity")
+afb_cli_test(drop_gltf_unwritable 1 ARGS drop --base . chain --steps 1
+             --gltf ${CMAKE_CURRENT_BINARY_DIR}/no/such/folder/chain.glb MATCH "assimp could not write")
+
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)
   add_test(NAME cli.content_reproducible

@@ -2,7 +2,9 @@
 // Drop tests: figures dropped onto a ground plane, measured for speed, accuracy and stability while they fall.
 // Shared by `afb drop`, `afb golden`, tests and benchmarks (ARCHITECTURE.md: src/sim).
 #include <cstdint>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -60,8 +62,14 @@ struct DropResult {
     figure::Transform firstSpawn;
 };
 
-/// Runs one drop of `figure`. Deterministic for a given build, options and input.
-DropResult runDrop(const figure::Figure& figure, const DropOptions& options);
+/// Watches the first instance of a drop frame by frame (`afb drop --gltf` records it this way): called with frame 0
+/// at spawn, before the first step, then after every step k with frame k, each time with the instance's body frames
+/// (centre of mass, principal axes; world space, metres, Z up; in body order). Runs on the first world's thread.
+using DropObserver = std::function<void(int frame, std::span<const figure::Transform> bodiesWorld)>;
+
+/// Runs one drop of `figure`. Deterministic for a given build, options and input. `observer`, when set, sees the
+/// first instance at every step (an empty one costs nothing and changes nothing).
+DropResult runDrop(const figure::Figure& figure, const DropOptions& options, const DropObserver& observer = {});
 
 /// Thresholds of `exploded`: a speed over kExplodeSpeedMps, an anchor error over kExplodeAnchorM, or NaN.
 inline constexpr double kExplodeSpeedMps = 100.0;
