@@ -66,6 +66,11 @@ afb_cli_test(draw_bad_extension 1 ARGS draw --base . chain --out ${CMAKE_CURRENT
 afb_cli_test(draw_unknown 1 ARGS draw --base . no_such_entity --out ${CMAKE_CURRENT_BINARY_DIR}/none.png
              MATCH "no_such_entity")
 
+# afb drop --method raw: plain Bullet, the reference; afbullet's techniques refused for it.
+afb_cli_test(drop_raw 0 ARGS drop --base . chain --seconds 1 --method raw MATCH "method raw \\(" "chain")
+afb_cli_test(drop_raw_technique 1 ARGS drop --base . chain --method raw --speculative-limits on
+             MATCH "has no speculative-limits")
+
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)
   add_test(NAME cli.content_reproducible
