@@ -53,6 +53,17 @@ std::string cell(std::string s) {
     return s;
 }
 
+// Tic marks 1, 2, 5 × 10^k within [lo, hi] (gnuplot's log axes mark only the decades).
+std::string ticList(double lo, double hi) {
+    std::string out;
+    for (int k = static_cast<int>(std::floor(std::log10(lo))); k <= static_cast<int>(std::ceil(std::log10(hi))); ++k)
+        for (double m : {1.0, 2.0, 5.0}) {
+            const double v = m * std::pow(10.0, k);
+            if (v >= lo && v <= hi) out += (out.empty() ? "" : ", ") + number(v);
+        }
+    return out;
+}
+
 // Point labels of a data block: alternate points (by cost) above and below, so neighbours do not overlap.
 std::string labels(int block, int column, int labelColumn, const char* every, const char* offset, int lineType) {
     return "\"front.dat\" index " + std::to_string(block) + " " + every + " using 1:" + std::to_string(column) + ":" +
@@ -83,7 +94,10 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
         for (const ChartPoint& p : mine) {
             data << number(p.costUs) << '\t' << number(p.costMinUs) << '\t' << number(p.costMaxUs);
             for (ChartMetric m : sim::kChartMetrics) data << '\t' << number(drawn(p, m, options.seconds));
-            data << '\t' << cell(p.label) << '\t' << cell(p.label + (p.settleS ? "" : " (never)")) << '\n';
+            // Exploded methods are marked; a settle label only where the method came to rest (an empty field is
+            // missing to gnuplot: no label).
+            const std::string label = cell(p.label) + (p.exploded ? " ✗" : "");
+            data << '\t' << label << '\t' << (p.settleS ? label : std::string()) << '\n';
         }
         for (ChartMetric m : sim::kChartMetrics) {
             const std::vector<std::size_t> front = sim::chartFront(mine, {m}); // ascending: cheapest first
@@ -108,7 +122,7 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
             lo = std::min(lo, drawn(p, m, options.seconds));
             hi = std::max(hi, drawn(p, m, options.seconds));
         }
-        return "[" + number(lo / 2) + ":" + number(hi * 2) + "]";
+        return std::make_pair(lo / 2, hi * 2);
     };
 
     const int figureCount = static_cast<int>(figures.size());
@@ -119,7 +133,7 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
        << "set encoding utf8\n";
     for (int f = 0; f < figureCount; ++f)
         gp << "set linetype " << f + 1 << " lc rgb " << quoted(kColours[f % kColourCount]) << " lw 1.5 pt 7 ps 1.1\n";
-    const std::string title = "afb chart: speed against accuracy\\n" + subtitle;
+    const std::string title = "afb chart: speed against accuracy\\n" + subtitle + "; ✗: exploded (off the fronts)";
     const char* terminals[][2] = {{"pngcairo size 1600,1200 font \"DejaVu Sans,11\" noenhanced", "front.png"},
                                   {"svg size 1600,1200 font \"DejaVu Sans,11\" noenhanced", "front.svg"}};
     for (const auto& [terminal, file] : terminals) {
@@ -129,13 +143,16 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
            << "set key top right box opaque\n"
            << "set xlabel \"cost: CPU µs per awake body-step (median, bars: min–max of " << options.repeats
            << " repeats)\"\n"
-           << "set xrange [" << number(xLo / 1.5) << ":" << number(xHi * 3) << "]\n";
+           << "set xrange [" << number(xLo / 1.5) << ":" << number(xHi * 3) << "]\n"
+           << "set xtics (" << ticList(xLo / 1.5, xHi * 3) << ")\n";
         int panel = 0;
         for (ChartMetric m : sim::kChartMetrics) {
             std::string ylabel(sim::metricTitle(m));
             if (m == ChartMetric::Settle) ylabel += " (never: drawn at " + number(options.seconds) + " s)";
             else ylabel += " (0 drawn at " + number(kFloor) + ")";
-            gp << "set ylabel " << quoted(ylabel) << "\nset yrange " << yRange(m) << "\n"
+            const auto [yLo, yHi] = yRange(m);
+            gp << "set ylabel " << quoted(ylabel) << "\nset yrange [" << number(yLo) << ":" << number(yHi) << "]\n"
+               << "set ytics (" << ticList(yLo, yHi) << ")\n"
                << "set title " << quoted(std::string(sim::metricTitle(m)) + " against cost; dashed: Pareto front")
                << "\nplot ";
             for (int f = 0; f < figureCount; ++f) {

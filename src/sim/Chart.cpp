@@ -84,13 +84,21 @@ std::vector<ChartRun> runChart(const std::vector<figure::Figure>& figures, const
                 break;
             }
 
+    // Executed repeat by repeat (every method's first repeat, then every method's second, …), so that a change
+    // of load on the machine during the chart falls on every method alike instead of on the last ones.
+    std::vector<std::size_t> order(runs.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return runs[a].repeat < runs[b].repeat; });
+
     const int total = static_cast<int>(runs.size());
     std::atomic<std::size_t> next{0};
     std::mutex mutex;
     std::condition_variable finished;
     int done = 0;
     auto worker = [&] {
-        for (std::size_t i = next++; i < runs.size(); i = next++) {
+        for (std::size_t k = next++; k < order.size(); k = next++) {
+            const std::size_t i = order[k];
             ChartRun& run = runs[i];
             DropOptions d;
             d.heightM = run.heightM;
@@ -203,14 +211,21 @@ std::vector<std::size_t> paretoFront(const std::vector<std::vector<double>>& obj
 }
 
 std::vector<std::size_t> chartFront(const std::vector<ChartPoint>& points, const std::vector<ChartMetric>& metrics) {
+    // Candidates: methods that held together and had an awake body to charge (an exploded method is no choice,
+    // and one without a cost cannot be compared).
+    std::vector<std::size_t> candidates;
     std::vector<std::vector<double>> objectives;
-    for (const ChartPoint& p : points) {
-        // A method that never had an awake body to charge has no cost to compare: it cannot be on the front.
-        std::vector<double> o = {p.costUs > 0 ? p.costUs : std::numeric_limits<double>::infinity()};
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const ChartPoint& p = points[i];
+        if (p.exploded || p.costUs <= 0) continue;
+        std::vector<double> o = {p.costUs};
         for (ChartMetric m : metrics) o.push_back(metricValue(p, m));
+        candidates.push_back(i);
         objectives.push_back(std::move(o));
     }
-    return paretoFront(objectives);
+    std::vector<std::size_t> front;
+    for (std::size_t k : paretoFront(objectives)) front.push_back(candidates[k]);
+    return front;
 }
 
 std::optional<std::size_t> cheapestWithin(const std::vector<ChartPoint>& points, const ChartBounds& b) {
@@ -282,7 +297,7 @@ std::string chartSummaryMarkdown(const std::vector<ChartPoint>& points, const Ch
         << (o.count == 1 ? "" : "s") << ", sleeping " << (o.sleeping ? "on" : "off") << ".\n\n"
         << "Cost: thread CPU time per awake body-step, µs, the median of the repeats (min–max). Errors: the worst "
            "over the scenarios. A method is on the **Pareto front** when no other method is at least as cheap and "
-           "as accurate in all four errors and better in one.\n";
+           "as accurate in all four errors and better in one (methods that exploded are no choice and left out).\n";
     std::vector<std::string> figures;
     for (const ChartPoint& p : points)
         if (std::find(figures.begin(), figures.end(), p.figure) == figures.end()) figures.push_back(p.figure);
@@ -297,20 +312,26 @@ std::string chartSummaryMarkdown(const std::vector<ChartPoint>& points, const Ch
             << "|---|---|---|---|---|---|---|---|\n";
         for (std::size_t i = 0; i < mine.size(); ++i)
             out << pointRow(mine[i], std::find(front.begin(), front.end(), i) != front.end());
-        out << "\nPareto front (cheapest first):";
-        std::vector<std::size_t> byCost = front;
-        std::sort(byCost.begin(), byCost.end(),
-                  [&](std::size_t a, std::size_t b) { return mine[a].costUs < mine[b].costUs; });
-        for (std::size_t i = 0; i < byCost.size(); ++i)
-            out << (i ? ", " : " ") << "`" << mine[byCost[i]].label << "`"
-                << (mine[byCost[i]].exploded ? " (exploded)" : "");
-        out << ".\n";
+        auto names = [&](std::vector<std::size_t> members) {
+            std::sort(members.begin(), members.end(),
+                      [&](std::size_t a, std::size_t b) { return mine[a].costUs < mine[b].costUs; });
+            std::string text;
+            for (std::size_t i : members) text += (text.empty() ? "" : ", ") + ("`" + mine[i].label + "`");
+            return text.empty() ? std::string("none") : text;
+        };
+        out << "\nPareto front in cost and all four errors (cheapest first): " << names(front) << ".\n";
+        for (ChartMetric m : kChartMetrics)
+            out << "- front in cost and " << metricTitle(m) << ": " << names(chartFront(mine, {m})) << "\n";
+        std::string exploded;
+        for (const ChartPoint& p : mine)
+            if (p.exploded) exploded += (exploded.empty() ? "" : ", ") + ("`" + p.label + "`");
+        if (!exploded.empty()) out << "\nExploded (not on any front): " << exploded << ".\n";
         const std::optional<std::size_t> cheapest = cheapestWithin(mine, bounds);
         if (bounds.any())
-            out << "Cheapest within " << boundsText(bounds) << ": "
+            out << "\nCheapest within " << boundsText(bounds) << ": "
                 << (cheapest ? "`" + mine[*cheapest].label + "`" : std::string("none of the methods charted")) << ".\n";
         else
-            out << "Cheapest that does not explode: "
+            out << "\nCheapest that does not explode: "
                 << (cheapest ? "`" + mine[*cheapest].label + "`" : std::string("none")) << " (give bounds with "
                 << "--max-anchor-error, --max-limit-error, --max-penetration, --max-settle-time).\n";
     }

@@ -54,10 +54,15 @@ TEST_CASE("chart: the front of chart points uses the cost and the chosen errors"
         point("fast", 2.0, 30, 20, 80, 3.0),
         point("slow-and-bad", 3.0, 40, 25, 90, 4.0),
         point("exact", 5.0, 10, 10, 20, 2.0),
+        point("boom", 0.5, 1, 1, 1, 1.0, true), // would dominate everything, but exploded: no choice
+        point("asleep", 0.0, 1, 1, 1, 0.0),     // never awake: no cost to compare
     };
     CHECK(sim::chartFront(points, {sim::ChartMetric::Anchor}) == std::vector<std::size_t>{0, 1, 3});
     const std::vector<sim::ChartMetric> all(std::begin(sim::kChartMetrics), std::end(sim::kChartMetrics));
     CHECK(sim::chartFront(points, all) == std::vector<std::size_t>{0, 1, 3});
+    // In cost and settle time alone, raw (never at rest) is still the cheapest method: on the front.
+    CHECK(sim::chartFront(points, {sim::ChartMetric::Settle}) == std::vector<std::size_t>{0, 1, 3});
+    CHECK(sim::chartFront(points, {sim::ChartMetric::Penetration}) == std::vector<std::size_t>{0, 1, 3});
     CHECK(std::isinf(sim::metricValue(points[0], sim::ChartMetric::Settle)));
     CHECK(sim::metricValue(points[1], sim::ChartMetric::Anchor) == Approx(30));
 }

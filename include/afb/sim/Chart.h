@@ -48,8 +48,9 @@ struct ChartRun {
 };
 
 /// Runs the whole matrix: for each figure, method, height, rate and repeat (in that nesting order, which is the
-/// order of the result) one drop. Runs are spread over `options.threads` threads; every run owns its world, so
-/// every result but the timings is the same for any thread count. `progress(done, total)` is called from the
+/// order of the result) one drop. Runs are spread over `options.threads` threads, repeat by repeat (all first
+/// repeats, then all second ones: load on the machine falls on every method alike); every run owns its world,
+/// so every result but the timings is the same for any thread count. `progress(done, total)` is called from the
 /// calling thread now and then while runs finish, and once at the end.
 std::vector<ChartRun> runChart(const std::vector<figure::Figure>& figures, const ChartOptions& options,
                                const std::function<void(int done, int total)>& progress = {});
@@ -90,8 +91,8 @@ std::string_view metricTitle(ChartMetric metric);
 /// same length). Ties (equal in everything) are all kept. Ascending order.
 std::vector<std::size_t> paretoFront(const std::vector<std::vector<double>>& objectives);
 
-/// The front of `points` (one figure's) in cost and the given metrics; a point without a cost (never awake) is
-/// not on it.
+/// The front of `points` (one figure's) in cost and the given metrics, among the points that did not explode and
+/// have a cost (an exploded method is no choice; one never awake has no cost to compare). Ascending order.
 std::vector<std::size_t> chartFront(const std::vector<ChartPoint>& points, const std::vector<ChartMetric>& metrics);
 
 /// Upper bounds on a method's errors; unset bounds do not constrain.
@@ -107,8 +108,9 @@ std::optional<std::size_t> cheapestWithin(const std::vector<ChartPoint>& points,
 /// The CSV of every run: method_label, height_m, hz, repeat, then every drop field and knob (dropCsvHeader).
 std::string chartRunsCsv(const std::vector<ChartRun>& runs);
 
-/// summary.md: the setup, then per figure a table of every method (front members marked), the Pareto front
-/// and the cheapest method within `bounds`.
+/// summary.md: the setup, then per figure a table of every method (members of the all-errors front marked), that
+/// front, the front of each panel (cost and one error), the methods that exploded, and the cheapest method
+/// within `bounds`.
 std::string chartSummaryMarkdown(const std::vector<ChartPoint>& points, const ChartOptions& options,
                                  const ChartBounds& bounds, std::size_t runs);
 
