@@ -259,15 +259,7 @@ void Ragdoll::addConstraints() {
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
             break;
         }
-        case JointType::Slider: {
-            auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
-            s->setLowerLinLimit(1); // lower > upper: free along the axis
-            s->setUpperLinLimit(-1);
-            s->setLowerAngLimit(0); // no rotation
-            s->setUpperAngLimit(0);
-            main = std::move(s);
-            break;
-        }
+        case JointType::Slider: main = makeSlider(a, b, fa, fb); break;
         case JointType::Spring: {
             SpringConstraint::Params p;
             p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);

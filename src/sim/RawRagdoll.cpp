@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
 #include "afb/figure/Collision.h"
 
@@ -194,15 +195,7 @@ void RawRagdoll::addConstraints(const bullet::Method& method) {
             main = std::move(h);
             break;
         }
-        case JointType::Slider: {
-            auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
-            s->setLowerLinLimit(1); // lower > upper: free along the axis
-            s->setUpperLinLimit(-1);
-            s->setLowerAngLimit(0); // no rotation
-            s->setUpperAngLimit(0);
-            main = std::move(s);
-            break;
-        }
+        case JointType::Slider: main = bullet::makeSlider(a, b, fa, fb); break;
         case JointType::Spring: break; // no plain-Bullet counterpart
         }
         m_main.push_back(main.get());

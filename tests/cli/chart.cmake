@@ -6,14 +6,7 @@
 cmake_policy(SET CMP0007 NEW) # empty CSV cells are list elements
 file(REMOVE_RECURSE ${TMP})
 
-function(run expected)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${ARGN}\n${out}${err}")
-  if(NOT rc STREQUAL expected)
-    message(FATAL_ERROR "exit code ${rc}, expected ${expected}")
-  endif()
-  set(run_output "${out}${err}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run.cmake)
 
 run(0 ${AFB} chart --base ${SRC} chain --methods raw,fast:position-iterations=1 --heights 1 --hz 60 --repeats 1
     --seconds 0.5 --threads 2 --out ${TMP} --max-anchor-error 0.5)

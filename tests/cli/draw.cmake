@@ -5,13 +5,7 @@
 file(REMOVE_RECURSE ${TMP})
 file(MAKE_DIRECTORY ${TMP})
 
-function(run expected)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${ARGN}\n${out}${err}")
-  if(NOT rc STREQUAL expected)
-    message(FATAL_ERROR "exit code ${rc}, expected ${expected}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run.cmake)
 
 run(0 ${AFB} draw --base ${SRC} humanoid --out ${TMP}/load.png)
 run(0 ${CHECK} png ${TMP}/load.png)
