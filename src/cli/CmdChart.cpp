@@ -84,7 +84,8 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
     cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
         ->check(CLI::IsMember({"float", "double"}));
     cmd->add_flag("--no-sleep", opt->noSleep, "Never put figures to rest (no settle times)");
-    cmd->add_option("--max-anchor-error", opt->maxAnchor, "Bound for the cheapest-method choice, m");
+    cmd->add_option("--max-anchor-error", opt->maxAnchor,
+                    "Bound on the anchor error for the cheapest-method choice, m");
     cmd->add_option("--max-limit-error", opt->maxLimit, "Bound on the limit overshoot, degrees");
     cmd->add_option("--max-penetration", opt->maxPenetration, "Bound on the peak penetration, m");
     cmd->add_option("--max-settle-time", opt->maxSettle, "Bound on the settle time, s");

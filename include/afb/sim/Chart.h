@@ -28,7 +28,7 @@ std::optional<ChartMethod> parseChartMethod(std::string_view spec, std::string& 
 
 /// What a chart runs.
 struct ChartOptions {
-    std::vector<ChartMethod> methods;
+    std::vector<ChartMethod> methods;           ///< labels unique: they name the points
     std::vector<double> heightsM = {1.0, 10.0}; ///< drop heights (scenarios), metres
     std::vector<double> hz = {60.0};            ///< frame rates (scenarios)
     int repeats = 3;                            ///< runs of each (method, figure, scenario), for the cost's spread
