@@ -248,4 +248,14 @@ void SpringConstraint::getInfo2(btConstraintInfo2* info) {
         setRow(-1, info->erp * info->fps * (st.length - m_params.maxLength), 0, kInfinity);
 }
 
+std::unique_ptr<btSliderConstraint> makeSlider(btRigidBody& a, btRigidBody& b, const btTransform& frameInA,
+                                               const btTransform& frameInB) {
+    auto s = std::make_unique<btSliderConstraint>(a, b, frameInA, frameInB, false);
+    s->setLowerLinLimit(1); // lower > upper: free along the axis
+    s->setUpperLinLimit(-1);
+    s->setLowerAngLimit(0); // no rotation
+    s->setUpperAngLimit(0);
+    return s;
+}
+
 } // namespace afb::bullet

@@ -9,31 +9,11 @@
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollWorld.h"
 #include "afb/figure/Collision.h"
-#include "afb/figure/Limits.h"
 
 namespace afb::bullet {
 
 using figure::FigureConstraint;
 using figure::JointType;
-
-namespace {
-
-// Fixed restitution of AF bodies (af-format §3.4; the engine applies it above 2 units/s only).
-constexpr btScalar kRestitution = btScalar(0.4);
-
-// The rotation taking unit vector `from` to unit vector `to` along the shortest arc.
-btMatrix3x3 shortestArc(btVector3 from, btVector3 to) { return btMatrix3x3(shortestArcQuatNormalize2(from, to)); }
-
-// A rotation whose first column is `x` (unit).
-btMatrix3x3 basisWithX(const btVector3& x) {
-    btVector3 y, z;
-    btPlaneSpace1(x, y, z);
-    btMatrix3x3 m;
-    m.setValue(x.x(), y.x(), z.x(), x.y(), y.y(), z.y(), x.z(), y.z(), z.z());
-    return m;
-}
-
-} // namespace
 
 // Per-step work of a ragdoll: the joint friction bounds follow each joint's reaction force of the step just
 // solved (af-format §4.8), and the rest rules (§6.1) decide when the figure sleeps.
@@ -62,69 +42,21 @@ class Ragdoll::Action : public btActionInterface {
             return;
         }
         activeTime += dt;
-        if (m_comeToRest && testRest(dt)) m_owner.putToRest();
+        if (m_comeToRest && m_rest.update(m_owner.m_bodies, dt, activeTime)) m_owner.putToRest();
     }
     void debugDraw(btIDebugDraw*) override {}
 
     void wake() {
         atRest = false;
         activeTime = 0;
-        m_windowStart = -1;
-        m_havePrevious = false;
+        m_rest.reset();
         for (const auto& b : m_owner.m_bodies) b->activate(true);
     }
 
   private:
-    // af-format §6.1 TestIfAtRest.
-    bool testRest(double dt) {
-        const figure::RestRules& r = m_owner.figure().rest;
-        const auto& bodies = m_owner.m_bodies;
-        bool speedsLow = m_havePrevious;
-        if (m_previous.size() != bodies.size()) m_previous.resize(bodies.size());
-        for (std::size_t i = 0; i < bodies.size(); ++i) {
-            const btVector3 v = bodies[i]->getLinearVelocity(), w = bodies[i]->getAngularVelocity();
-            if (m_havePrevious) {
-                const double accel = (v - m_previous[i].first).length() / dt;
-                const double angAccel = (w - m_previous[i].second).length() / dt;
-                if (v.length() > r.linearSpeedMps || w.length() > r.angularSpeedRadps || accel > r.linearAccelMps2 ||
-                    angAccel > r.angularAccelRadps2)
-                    speedsLow = false;
-            }
-            m_previous[i] = {v, w};
-        }
-        m_havePrevious = true;
-        if (r.minMoveTimeS > 0 && activeTime < r.minMoveTimeS) return false;
-        if (r.maxMoveTimeS > 0 && activeTime > r.maxMoveTimeS) return true;
-        // The no-move window: compare every body with its pose at the window's start.
-        if (m_windowStart < 0) {
-            startWindow();
-        } else if (activeTime - m_windowStart > r.noMoveTimeS) {
-            bool still = true;
-            for (std::size_t i = 0; i < bodies.size(); ++i) {
-                const btTransform& now = bodies[i]->getCenterOfMassTransform();
-                const btTransform& then = m_window[i];
-                const btQuaternion dq = now.getRotation() * then.getRotation().inverse();
-                if ((now.getOrigin() - then.getOrigin()).length() >= r.noMoveTranslationM ||
-                    dq.getAngleShortestPath() >= r.noMoveRotationRad)
-                    still = false;
-            }
-            startWindow();
-            if (still) return true;
-        }
-        return speedsLow;
-    }
-    void startWindow() {
-        m_windowStart = activeTime;
-        m_window.clear();
-        for (const auto& b : m_owner.m_bodies) m_window.push_back(b->getCenterOfMassTransform());
-    }
-
     Ragdoll& m_owner;
     bool m_comeToRest;
-    double m_windowStart = -1;
-    std::vector<btTransform> m_window;
-    std::vector<std::pair<btVector3, btVector3>> m_previous;
-    bool m_havePrevious = false;
+    RestTest m_rest{m_owner.figure().rest};
 };
 
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
@@ -146,47 +78,16 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
 
-std::vector<figure::BodyState> Ragdoll::bodyStates() const {
-    std::vector<figure::BodyState> out;
-    out.reserve(m_bodies.size());
-    for (const auto& b : m_bodies)
-        out.push_back({toEigen(b->getCenterOfMassTransform()), toEigen(b->getLinearVelocity()),
-                       toEigen(b->getAngularVelocity())});
-    return out;
+std::vector<figure::BodyState> Ragdoll::bodyStates() const { return bodyStatesOf(m_bodies); }
+
+int Ragdoll::awakeBodyCount() const { return awakeCountOf(m_bodies); }
+
+JointError Ragdoll::jointError(int i) const {
+    return jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
+                        m_frames[static_cast<std::size_t>(i)], m_spawn);
 }
 
-int Ragdoll::awakeBodyCount() const {
-    int n = 0;
-    for (const auto& b : m_bodies) n += b->isActive() ? 1 : 0;
-    return n;
-}
-
-Ragdoll::JointError Ragdoll::jointError(int i) const {
-    const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
-    JointError e;
-    if (c.type == JointType::Spring) return e;
-    const auto [a, b] = constraintFramesWorld(i);
-    const btVector3 d = a.getOrigin() - b.getOrigin();
-    e.anchorM = d.length();
-    if (c.type == JointType::Slider) { // free along the axis: only the perpendicular part counts
-        const btVector3 axis = b.getBasis().getColumn(0);
-        e.anchorM = (d - axis * d.dot(axis)).length();
-    }
-    // One definition of a limit's excess (figure/Limits.h), in double, for every backend's metrics.
-    const btMatrix3x3 body1 = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform().getBasis();
-    const btMatrix3x3 body2 = c.body2 >= 0
-                                  ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform().getBasis()
-                                  : m_spawn.getBasis();
-    e.limitExcessRad = figure::limitExcessRad(c, toEigen(body1), toEigen(body2));
-    return e;
-}
-
-std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
-    std::vector<figure::Transform> out;
-    out.reserve(m_bodies.size());
-    for (const auto& b : m_bodies) out.push_back(toEigen(b->getCenterOfMassTransform()));
-    return out;
-}
+std::vector<figure::Transform> Ragdoll::bodyTransforms() const { return bodyTransformsOf(m_bodies); }
 
 bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
     if (states.size() != m_bodies.size()) return false;
@@ -246,7 +147,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
                                                       m_asset->shape(static_cast<int>(i)), toBt(b.inertiaKgM2));
         info.m_startWorldTransform = m_spawn * toBt(b.loadPose);
         info.m_friction = static_cast<btScalar>(b.contactFriction);
-        info.m_restitution = kRestitution;
+        info.m_restitution = static_cast<btScalar>(kBodyRestitution);
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
         auto body = std::make_unique<btRigidBody>(info);
@@ -280,12 +181,8 @@ btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
 }
 
 std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
-    const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
-    const auto& [fa, fb] = m_frames[static_cast<std::size_t>(i)];
-    const btTransform a = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * fa;
-    const btTransform b =
-        c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * fb : fb;
-    return {a, b};
+    return constraintFramesWorldOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
+                                   m_frames[static_cast<std::size_t>(i)]);
 }
 
 void Ragdoll::addConstraints() {
@@ -362,15 +259,7 @@ void Ragdoll::addConstraints() {
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
             break;
         }
-        case JointType::Slider: {
-            auto s = std::make_unique<btSliderConstraint>(a, b, fa, fb, false);
-            s->setLowerLinLimit(1); // lower > upper: free along the axis
-            s->setUpperLinLimit(-1);
-            s->setLowerAngLimit(0); // no rotation
-            s->setUpperAngLimit(0);
-            main = std::move(s);
-            break;
-        }
+        case JointType::Slider: main = makeSlider(a, b, fa, fb); break;
         case JointType::Spring: {
             SpringConstraint::Params p;
             p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);

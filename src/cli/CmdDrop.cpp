@@ -57,12 +57,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                     "its skeleton, the body hulls, the ground and one animation at the step rate; metres, Y up");
     cmd->callback([opt, &exitCode, argc, argv] {
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
-            // The two Bullet builds cannot share a process: run the sibling binary built against the other one.
-            const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
-            const std::filesystem::path other =
-                self.parent_path() / (opt->precision == "double" ? "afb-double" : "afb");
-            ::execv(other.c_str(), argv);
-            std::cerr << "afb drop: cannot run " << other.string() << " for --precision " << opt->precision << "\n";
+            execOtherPrecision(opt->precision, argv, "afb drop");
             exitCode = 1;
             return;
         }
@@ -167,6 +162,13 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         }
         if (diags.hasErrors()) exitCode = 1;
     });
+}
+
+void execOtherPrecision(const std::string& precision, char** argv, const char* command) {
+    const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
+    const std::filesystem::path other = self.parent_path() / (precision == "double" ? "afb-double" : "afb");
+    ::execv(other.c_str(), argv);
+    std::cerr << command << ": cannot run " << other.string() << " for --precision " << precision << "\n";
 }
 
 } // namespace afb::cli

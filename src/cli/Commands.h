@@ -21,6 +21,13 @@ void addGoldenCommand(CLI::App& app, int& exitCode);
 void addInspectCommand(CLI::App& app, int& exitCode);
 /// Registers `afb draw`.
 void addDrawCommand(CLI::App& app, int& exitCode);
+/// Registers `afb chart`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
+void addChartCommand(CLI::App& app, int& exitCode, char** argv);
+
+/// Replaces this process by the sibling binary built against the other Bullet precision ("afb" for float,
+/// "afb-double" for double) with the same arguments: the two builds cannot share a process. Returns only when
+/// that fails, after printing why (`command` names the caller in the message).
+void execOtherPrecision(const std::string& precision, char** argv, const char* command);
 
 /// Prints every diagnostic to stderr as `file:line:col: error: message`.
 void printDiagnostics(const text::Diagnostics& diagnostics);

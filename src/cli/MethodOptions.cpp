@@ -1,11 +1,14 @@
 #include "MethodOptions.h"
 
+#include "afb/sim/RawRagdoll.h"
+
 namespace afb::cli {
 
 void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& options) {
     std::string presets;
-    for (std::string_view p : bullet::methodPresetNames()) presets += (presets.empty() ? "" : ", ") + std::string(p);
-    cmd->add_option("--method", options->preset, "How figures are simulated: " + presets + " (README: Methods)")
+    for (std::string_view p : sim::methodNames()) presets += (presets.empty() ? "" : ", ") + std::string(p);
+    cmd->add_option("--method", options->preset,
+                    "How figures are simulated: " + presets + " (README: Methods; raw: plain Bullet, the reference)")
         ->capture_default_str();
     const auto knobs = bullet::methodKnobs();
     options->overrides.assign(knobs.size(), std::string());
@@ -18,10 +21,10 @@ void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& optio
 }
 
 std::optional<bullet::Method> resolveMethod(const MethodOptions& options, std::string& error) {
-    auto method = bullet::methodPreset(options.preset);
+    auto method = sim::methodByName(options.preset);
     if (!method) {
         error = "--method " + options.preset + ": unknown method (";
-        for (std::string_view p : bullet::methodPresetNames()) error += " " + std::string(p);
+        for (std::string_view p : sim::methodNames()) error += " " + std::string(p);
         error += " )";
         return std::nullopt;
     }
@@ -31,6 +34,8 @@ std::optional<bullet::Method> resolveMethod(const MethodOptions& options, std::s
         error = bullet::setKnob(*method, knobs[i], options.overrides[i]);
         if (!error.empty()) return std::nullopt;
     }
+    error = sim::rawMethodError(*method);
+    if (!error.empty()) return std::nullopt;
     return method;
 }
 

@@ -5,13 +5,16 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <random>
 #include <thread>
 
 #include <LinearMath/btScalar.h>
+#include <time.h>
 
 #include "afb/bullet/Convert.h"
 #include "afb/pose/SkeletonDriver.h"
+#include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
 
 namespace afb::sim {
@@ -36,13 +39,16 @@ void figureBounds(const figure::Figure& f, const btMatrix3x3& rotation, btVector
 struct Partial {
     DropResult r;
     double stepSeconds = 0;
+    double cpuSeconds = 0;                    // thread CPU time inside the steps
+    double awakeCpuSeconds = 0;               // of it, in steps that began or ended with a body awake
     double worstAnchor = -1, worstLimit = -1; // for the names of the worst joints
     std::vector<double> restTimes;            // per instance, −1 if never
     std::vector<figure::Transform> firstBodies;
 };
 
 // Kinetic + potential energy of a ragdoll, J, from its body states and the figure's mass properties.
-double energy(const Ragdoll& d, double g) {
+template <class Doll>
+double energy(const Doll& d, double g) {
     double e = 0;
     const std::vector<figure::BodyState> states = d.bodyStates();
     for (std::size_t i = 0; i < states.size(); ++i) {
@@ -55,12 +61,20 @@ double energy(const Ragdoll& d, double g) {
     return e;
 }
 
+// The body's name if `o` is one of `dolls`' bodies.
+template <class Doll>
+std::optional<std::string> bodyName(const std::vector<std::unique_ptr<Doll>>& dolls, const btCollisionObject* o) {
+    for (const auto& d : dolls)
+        for (int i = 0; i < d->bodyCount(); ++i)
+            if (&d->body(i) == o) return d->figure().bodies[static_cast<std::size_t>(i)].name;
+    return std::nullopt;
+}
+
 // "figure/body" of a collision object in the scene, "ground", or "other".
 std::string objectName(Scene& scene, const btCollisionObject* o) {
     if (o == scene.ground()) return "ground";
-    for (const auto& d : scene.ragdolls())
-        for (int i = 0; i < d->bodyCount(); ++i)
-            if (&d->body(i) == o) return d->figure().bodies[static_cast<std::size_t>(i)].name;
+    if (auto name = bodyName(scene.ragdolls(), o)) return *name;
+    if (auto name = bodyName(scene.rawRagdolls(), o)) return *name;
     return "other";
 }
 
@@ -68,20 +82,21 @@ std::string contactName(Scene& scene, const ContactDepth& c) {
     return objectName(scene, c.a) + " / " + objectName(scene, c.b);
 }
 
+// CPU time this thread has used, seconds (what the cost of a method is measured in: not wall time, so other
+// threads and processes on the machine do not count).
+double threadCpuSeconds() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+// The measurements of one world, the same for every kind of ragdoll (bullet::Ragdoll or the plain-Bullet
+// RawRagdoll): everything is read through the ragdolls' probes and the scene's contacts.
 // `observer` (first world only, may be null) sees the first instance at spawn and after every step.
-Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOptions& o,
-                 const std::vector<btTransform>& spawns, bool holdsFirst, int steps, const DropObserver* observer) {
+template <class Doll>
+Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, const DropOptions& o, double g,
+                bool holdsFirst, int steps, const DropObserver* observer) {
     Partial out;
-    const double g = asset->figure().units.gravityMps2;
-    Scene scene(o.method, SceneSettings{g, true, 1.0});
-    for (const btTransform& t : spawns) {
-        bullet::SpawnOptions so;
-        so.entityTransform = t;
-        so.comeToRest = o.sleeping;
-        so.startAtRest = o.startAtRest;
-        scene.spawn(asset, so);
-    }
-    const auto& dolls = scene.ragdolls();
     out.restTimes.assign(dolls.size(), -1);
     if (dolls.empty()) observer = nullptr;
     if (observer) (*observer)(0, dolls[0]->bodyTransforms());
@@ -93,18 +108,32 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
     };
     const double e0 = totalEnergy();
     const int lastSecondFrom = steps - static_cast<int>(std::lround(o.hz));
+    auto awakeNow = [&] {
+        int n = 0;
+        for (const auto& d : dolls) n += d->awakeBodyCount();
+        return n;
+    };
+    int awakeBefore = awakeNow();
     for (int step = 0; step < steps; ++step) {
         const auto t0 = std::chrono::steady_clock::now();
+        const double cpu0 = threadCpuSeconds();
         scene.step(1.0 / o.hz);
+        const double cpu = threadCpuSeconds() - cpu0;
         out.stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const double now = (step + 1) / o.hz;
         ++out.r.steps;
         if (observer) (*observer)(step + 1, dolls[0]->bodyTransforms());
+        // The cost of a method is the CPU of steps that simulated something: a world whose ragdolls all sleep
+        // still costs a little per step, which is not the method's.
+        const int awake = awakeNow();
+        out.cpuSeconds += cpu;
+        if (awakeBefore > 0 || awake > 0) out.awakeCpuSeconds += cpu;
+        awakeBefore = awake;
+        out.r.awakeBodySteps += awake;
 
         bool allRest = true;
         for (std::size_t k = 0; k < dolls.size(); ++k) {
-            Ragdoll& d = *dolls[k];
-            out.r.awakeBodySteps += d.awakeBodyCount();
+            const Doll& d = *dolls[k];
             for (const figure::BodyState& b : d.bodyStates()) {
                 const double speed = b.linearVelocity.norm();
                 if (!std::isfinite(speed) || !b.pose.position.allFinite() || speed > kExplodeSpeedMps) {
@@ -114,7 +143,7 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
                 if (std::isfinite(speed)) out.r.maxSpeedMps = std::max(out.r.maxSpeedMps, speed);
             }
             for (int c = 0; c < static_cast<int>(d.figure().constraints.size()); ++c) {
-                const Ragdoll::JointError e = d.jointError(c);
+                const bullet::JointError e = d.jointError(c);
                 const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
                 if (e.anchorM > out.worstAnchor) {
                     out.worstAnchor = e.anchorM;
@@ -144,6 +173,23 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
     }
     if (holdsFirst && !dolls.empty()) out.firstBodies = dolls[0]->bodyTransforms();
     return out;
+}
+
+// One world: a scene with the method, the instances spawned (plain Bullet's for the raw method), measured.
+Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOptions& o,
+                 const std::vector<btTransform>& spawns, bool holdsFirst, int steps, const DropObserver* observer) {
+    const double g = asset->figure().units.gravityMps2;
+    Scene scene(o.method, SceneSettings{g, true, 1.0});
+    for (const btTransform& t : spawns) {
+        bullet::SpawnOptions so;
+        so.entityTransform = t;
+        so.comeToRest = o.sleeping;
+        so.startAtRest = o.startAtRest;
+        if (isRaw(o.method)) scene.spawnRaw(asset, so);
+        else scene.spawn(asset, so);
+    }
+    if (isRaw(o.method)) return measure(scene, scene.rawRagdolls(), o, g, holdsFirst, steps, observer);
+    return measure(scene, scene.ragdolls(), o, g, holdsFirst, steps, observer);
 }
 
 } // namespace
@@ -207,11 +253,13 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     r.method = o.method;
     r.bodies = static_cast<int>(figure.bodies.size()) * count;
     r.constraints = static_cast<int>(figure.constraints.size()) * count;
-    double stepSeconds = parts[0].stepSeconds, lastRest = 0;
+    double stepSeconds = parts[0].stepSeconds, cpuSeconds = 0, awakeCpuSeconds = 0, lastRest = 0;
     double worstAnchor = parts[0].worstAnchor, worstLimit = parts[0].worstLimit;
     bool allRested = true;
     for (std::size_t w = 0; w < parts.size(); ++w) {
         const DropResult& p = parts[w].r;
+        cpuSeconds += parts[w].cpuSeconds; // CPU time adds up over the worlds' threads
+        awakeCpuSeconds += parts[w].awakeCpuSeconds;
         if (w > 0) {
             r.awakeBodySteps += p.awakeBodySteps;
             r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, p.maxAnchorErrorM);
@@ -242,6 +290,9 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     r.wallMs = wallSeconds * 1000.0;
     r.usPerStep = r.steps > 0 ? stepSeconds * 1e6 / r.steps : 0;
     r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * worlds / r.bodies : 0;
+    r.stepCpuMs = cpuSeconds * 1000.0;
+    r.awakeStepCpuMs = awakeCpuSeconds * 1000.0;
+    r.cpuUsPerAwakeBodyStep = r.awakeBodySteps > 0 ? awakeCpuSeconds * 1e6 / static_cast<double>(r.awakeBodySteps) : 0;
 
     // The first instance's pose, in its own model space (metres).
     r.firstBodies = parts[0].firstBodies;

@@ -4,6 +4,8 @@
 #include <functional>
 #include <sstream>
 
+#include "afb/sim/RawRagdoll.h"
+
 namespace afb::sim {
 namespace {
 
@@ -31,6 +33,12 @@ const std::vector<Field>& fields() {
         {"us_per_body_step", "us_per_step × worlds / bodies",
          [](const DropResult& r) { return json(r.usPerBodyStep); }},
         {"awake_body_steps", "body-steps not asleep", [](const DropResult& r) { return json(r.awakeBodySteps); }},
+        {"step_cpu_ms", "thread CPU time inside the steps, all worlds",
+         [](const DropResult& r) { return json(r.stepCpuMs); }},
+        {"awake_step_cpu_ms", "of it, the steps that began or ended with a body awake",
+         [](const DropResult& r) { return json(r.awakeStepCpuMs); }},
+        {"cpu_us_per_awake_body_step", "awake_step_cpu_ms per awake body-step, in us (the cost afb chart plots)",
+         [](const DropResult& r) { return json(r.cpuUsPerAwakeBodyStep); }},
         {"max_anchor_error_m", "largest separation of a constraint's two anchor copies (sliders: off-axis only)",
          [](const DropResult& r) { return json(r.maxAnchorErrorM); }},
         {"worst_anchor_joint", "the constraint where it happened",
@@ -90,7 +98,7 @@ json methodJson(const bullet::Method& m) {
 std::string methodFromJson(const json& j, bullet::Method& out) {
     if (!j.is_object()) return "method: not an object";
     const std::string name = j.value("name", std::string("default"));
-    auto m = bullet::methodPreset(name);
+    auto m = methodByName(name);
     if (!m) {
         m = bullet::Method{};
         m->name = name; // a recorded custom name: its knobs follow

@@ -22,6 +22,7 @@ Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
 
 Scene::~Scene() {
     m_ragdolls.clear();
+    m_rawRagdolls.clear();
     m_ragdollWorld.reset();
     if (m_ground) m_world->removeRigidBody(m_ground.get());
 }
@@ -30,6 +31,12 @@ bullet::Ragdoll& Scene::spawn(std::shared_ptr<const bullet::RagdollAsset> asset,
     options.method = m_method;
     m_ragdolls.push_back(std::make_unique<bullet::Ragdoll>(std::move(asset), *m_ragdollWorld, options));
     return *m_ragdolls.back();
+}
+
+RawRagdoll& Scene::spawnRaw(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options) {
+    options.method = m_method;
+    m_rawRagdolls.push_back(std::make_unique<RawRagdoll>(std::move(asset), *m_world, options));
+    return *m_rawRagdolls.back();
 }
 
 ContactDepth Scene::deepestContact() const {

@@ -81,6 +81,20 @@ afb_cli_test(drop_gltf_one_entity 1 ARGS drop --base . chain humanoid --steps 1
 afb_cli_test(drop_gltf_unwritable 1 ARGS drop --base . chain --steps 1
              --gltf ${CMAKE_CURRENT_BINARY_DIR}/no/such/folder/chain.glb MATCH "assimp could not write")
 
+# afb chart: a 2-method matrix on the chain, its CSV, summary and (with gnuplot) its pictures; bad method specs.
+find_program(AFB_GNUPLOT gnuplot)
+add_test(NAME cli.chart_matrix
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DCHECK=$<TARGET_FILE:afb_picture_check>"
+          "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/chart_matrix" "-DGNUPLOT=${AFB_GNUPLOT}"
+          -P ${CMAKE_CURRENT_LIST_DIR}/chart.cmake)
+afb_cli_test(chart_unknown_method 1 ARGS chart --base . chain --methods raw,nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
+             MATCH "unknown method nonsense")
+afb_cli_test(chart_raw_technique 1 ARGS chart --base . chain --methods raw:position-iterations=2
+             --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "raw \\(plain Bullet\\) has no position-iterations")
+afb_cli_test(drop_raw 0 ARGS drop --base . chain --seconds 1 --method raw MATCH "method raw \\(" "chain")
+afb_cli_test(drop_raw_technique 1 ARGS drop --base . chain --method raw --speculative-limits on
+             MATCH "has no speculative-limits")
+
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)
   add_test(NAME cli.content_reproducible

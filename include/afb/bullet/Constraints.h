@@ -1,5 +1,8 @@
 #pragma once
-// Constraints Bullet has no class for, written as btTypedConstraint / btActionInterface (af-format §4).
+// Constraints Bullet has no class for, written as btTypedConstraint / btActionInterface (af-format §4), and the
+// slider as Bullet's own class sets it up (shared by bullet::Ragdoll and sim::RawRagdoll).
+#include <memory>
+
 #include <btBulletDynamicsCommon.h>
 
 namespace afb::bullet {
@@ -135,5 +138,9 @@ class SpringConstraint : public btTypedConstraint {
     btVector3 m_anchorA, m_anchorB;
     Params m_params;
 };
+
+/// The slider of af-format §4.6 as Bullet's own constraint: free along the frames' X axis, no rotation.
+std::unique_ptr<btSliderConstraint> makeSlider(btRigidBody& a, btRigidBody& b, const btTransform& frameInA,
+                                               const btTransform& frameInB);
 
 } // namespace afb::bullet

@@ -1,5 +1,6 @@
 #pragma once
-// Eigen (figure layer, double) to Bullet (btScalar: float or double, per the Bullet build linked).
+// Eigen (figure layer, double) to Bullet (btScalar: float or double, per the Bullet build linked), and the two
+// rotations the Bullet builders (bullet::Ragdoll, sim::RawRagdoll) set up constraint frames with.
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/figure/Transform.h"
@@ -24,5 +25,19 @@ inline Eigen::Matrix3d toEigen(const btMatrix3x3& m) {
     return r;
 }
 inline figure::Transform toEigen(const btTransform& t) { return {toEigen(t.getBasis()), toEigen(t.getOrigin())}; }
+
+/// The rotation taking unit vector `from` to unit vector `to` along the shortest arc.
+inline btMatrix3x3 shortestArc(btVector3 from, btVector3 to) {
+    return btMatrix3x3(shortestArcQuatNormalize2(from, to));
+}
+
+/// A rotation whose first column is `x` (unit); the other two columns are Bullet's btPlaneSpace1 of it.
+inline btMatrix3x3 basisWithX(const btVector3& x) {
+    btVector3 y, z;
+    btPlaneSpace1(x, y, z);
+    btMatrix3x3 m;
+    m.setValue(x.x(), y.x(), z.x(), x.y(), y.y(), z.y(), x.z(), y.z(), z.z());
+    return m;
+}
 
 } // namespace afb::bullet

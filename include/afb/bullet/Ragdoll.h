@@ -7,6 +7,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Probes.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
@@ -14,6 +15,9 @@
 namespace afb::bullet {
 
 class RagdollWorld;
+
+/// Restitution of every AF body (af-format §3.4: the engine's fixed value; it applies it above 2 units/s only).
+inline constexpr double kBodyRestitution = 0.4;
 
 /// Where and how a ragdoll enters a world.
 struct SpawnOptions {
@@ -101,10 +105,7 @@ class Ragdoll {
     }
 
     /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
-    struct JointError {
-        double anchorM = 0;        ///< separation of the two anchor copies (sliders: off the axis only); 0 for springs
-        double limitExcessRad = 0; ///< how far a cone, pyramid or hinge limit is exceeded; 0 inside or without one
-    };
+    using JointError = bullet::JointError;
     JointError jointError(int i) const;
 
     /// World transforms of every body (body frames: centre of mass, principal axes), metres.

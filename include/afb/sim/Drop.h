@@ -23,7 +23,7 @@ struct DropOptions {
     double seconds = 10.0;             ///< simulated time (ignored when steps is set)
     std::optional<int> steps;          ///< exact number of steps; 0 reports the spawn pose
     double hz = 60.0;                  ///< fixed frame rate (each frame is the method's substeps)
-    bullet::Method method = {};        ///< how the figures are simulated
+    bullet::Method method = {};        ///< how the figures are simulated (RawRagdoll.h: "raw" is plain Bullet)
     bool sleeping = true;              ///< the figure's rest rules put it to sleep
     bool stopAtRest = false;           ///< end the run as soon as every instance is at rest
     bool startAtRest = false;          ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
@@ -44,6 +44,13 @@ struct DropResult {
     int bodies = 0, constraints = 0, steps = 0;
     double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
     long long awakeBodySteps = 0;
+    /// Thread CPU time inside the steps (CLOCK_THREAD_CPUTIME_ID), summed over the worlds, milliseconds.
+    double stepCpuMs = 0;
+    /// Of stepCpuMs, the steps that began or ended with some body awake (a world of sleeping ragdolls still costs
+    /// a little per step; that is not the method's cost).
+    double awakeStepCpuMs = 0;
+    /// awakeStepCpuMs per awake body-step, microseconds (0 without one): the cost of a method (afb chart).
+    double cpuUsPerAwakeBodyStep = 0;
     double maxAnchorErrorM = 0, maxLimitViolationDeg = 0, maxPenetrationM = 0, maxEnergyGainJ = 0;
     double restPenetrationM = 0;  ///< deepest contact over the last simulated second
     std::string worstAnchorJoint; ///< the constraint with the largest anchor error (empty when none)

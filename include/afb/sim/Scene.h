@@ -11,6 +11,7 @@
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/sim/RawRagdoll.h"
 
 namespace afb::sim {
 
@@ -38,6 +39,10 @@ class Scene {
 
     /// Spawns a ragdoll of `asset`; `options.method` is replaced by the scene's method.
     bullet::Ragdoll& spawn(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options = {});
+    /// Spawns plain Bullet's version of `asset` (the reference; see RawRagdoll); `options.method` is replaced by
+    /// the scene's method. A scene made with rawMethod() is a world with Bullet's defaults: its RagdollWorld sets
+    /// the knobs to them and its position pass and contact friction touch no raw body.
+    RawRagdoll& spawnRaw(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options = {});
 
     /// Steps one frame of `dtSeconds` (the method's substeps inside).
     void step(double dtSeconds) { m_ragdollWorld->step(dtSeconds); }
@@ -49,6 +54,8 @@ class Scene {
     btRigidBody* ground() { return m_ground.get(); }
     /// The ragdolls in spawn order.
     const std::vector<std::unique_ptr<bullet::Ragdoll>>& ragdolls() const { return m_ragdolls; }
+    /// The plain-Bullet ragdolls in spawn order.
+    const std::vector<std::unique_ptr<RawRagdoll>>& rawRagdolls() const { return m_rawRagdolls; }
 
     /// The deepest contact between any two objects now (ragdoll bodies and the ground).
     ContactDepth deepestContact() const;
@@ -64,6 +71,7 @@ class Scene {
     std::unique_ptr<btRigidBody> m_ground;
     std::unique_ptr<bullet::RagdollWorld> m_ragdollWorld;
     std::vector<std::unique_ptr<bullet::Ragdoll>> m_ragdolls; // destroyed first
+    std::vector<std::unique_ptr<RawRagdoll>> m_rawRagdolls;
 };
 
 } // namespace afb::sim

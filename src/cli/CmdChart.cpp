@@ -1,0 +1,193 @@
+// afb chart: speed against accuracy for a list of methods (plain Bullet's "raw" among them) on a list of figures.
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include <unistd.h>
+
+#include "ChartPlot.h"
+#include "Commands.h"
+#include "afb/figure/Load.h"
+#include "afb/sim/Chart.h"
+#include "afb/sim/RawRagdoll.h"
+
+namespace afb::cli {
+namespace {
+
+std::string clock(double seconds) {
+    const long s = std::lround(seconds);
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
+    return buf;
+}
+
+// "  [##########..........] 12/40 runs  0:35 elapsed  ~0:52 left" on one rewritten stderr line.
+void drawProgress(int done, int total, double elapsedSeconds) {
+    constexpr int kWidth = 30;
+    const int filled = total > 0 ? done * kWidth / total : kWidth;
+    std::string bar(static_cast<std::size_t>(filled), '#');
+    bar.resize(kWidth, '.');
+    const std::string left =
+        done > 0 && done < total ? "  ~" + clock(elapsedSeconds / done * (total - done)) + " left" : "";
+    std::fprintf(stderr, "\r  [%s] %d/%d runs  %s elapsed%s   ", bar.c_str(), done, total,
+                 clock(elapsedSeconds).c_str(), left.c_str());
+    if (done == total) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+}
+
+} // namespace
+
+void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
+    auto* cmd = app.add_subcommand("chart", "Chart speed against accuracy: methods x figures x heights x rates");
+    cmd->footer("Writes into --out: runs.csv (one row per run: method_label, height_m, hz, repeat and every afb drop "
+                "field and knob), front.png and front.svg (gnuplot: cost against each error, log-log, Pareto fronts "
+                "dashed), front.gp and front.dat (their script and data), summary.md (per figure: every method, the "
+                "Pareto front, the cheapest method within the --max-* bounds).\n"
+                "Methods: a preset or raw (plain Bullet), optionally with knob overrides: NAME[:KNOB=VALUE]..., e.g. "
+                "raw:substeps=4 or default:position-iterations=8 (knobs as in afb drop --help).\n"
+                "Cost: thread CPU time inside the steps per awake body-step (median of the repeats, min-max shown). "
+                "Instruction counts: README, 'afb chart'.");
+    struct Options {
+        std::filesystem::path base = ".";
+        std::vector<std::string> entities;
+        std::vector<std::string> methods = {"raw", "legacy", "fast", "default", "accurate", "exact"};
+        sim::ChartOptions chart;
+        std::filesystem::path out = "chart";
+        std::string precision;
+        bool noSleep = false;
+        std::optional<double> maxAnchor, maxLimit, maxPenetration, maxSettle;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("entities", opt->entities, "entityDefs to chart")->required();
+    cmd->add_option("--base", opt->base, "Content folder (af/, def/, models/)")->capture_default_str();
+    cmd->add_option("--methods", opt->methods, "Methods to chart, comma-separated (NAME[:KNOB=VALUE]...)")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--heights", opt->chart.heightsM, "Drop heights, m, comma-separated")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--hz", opt->chart.hz, "Frame rates, comma-separated")->delimiter(',')->capture_default_str();
+    cmd->add_option("--repeats", opt->chart.repeats, "Runs of each combination (the cost's median and spread)")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    cmd->add_option("--seconds", opt->chart.seconds, "Simulated time per run, s")
+        ->check(CLI::Range(0.0, 3600.0))
+        ->capture_default_str();
+    cmd->add_option("--count", opt->chart.count, "Instances per run (one world, yaw 37°·i)")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
+    cmd->add_option("--threads", opt->chart.threads, "Worker threads (each run owns its world)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->add_option("--out", opt->out, "Output folder (created)")->capture_default_str();
+    cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
+        ->check(CLI::IsMember({"float", "double"}));
+    cmd->add_flag("--no-sleep", opt->noSleep, "Never put figures to rest (no settle times)");
+    cmd->add_option("--max-anchor-error", opt->maxAnchor,
+                    "Bound on the anchor error for the cheapest-method choice, m");
+    cmd->add_option("--max-limit-error", opt->maxLimit, "Bound on the limit overshoot, degrees");
+    cmd->add_option("--max-penetration", opt->maxPenetration, "Bound on the peak penetration, m");
+    cmd->add_option("--max-settle-time", opt->maxSettle, "Bound on the settle time, s");
+    cmd->callback([opt, &exitCode, argv] {
+        if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
+            execOtherPrecision(opt->precision, argv, "afb chart");
+            exitCode = 1;
+            return;
+        }
+        sim::ChartOptions& chart = opt->chart;
+        chart.sleeping = !opt->noSleep;
+        for (const std::string& spec : opt->methods) {
+            std::string error;
+            auto m = sim::parseChartMethod(spec, error);
+            if (!m) {
+                std::cerr << "afb chart: " << error << "\n";
+                exitCode = 1;
+                return;
+            }
+            for (const sim::ChartMethod& other : chart.methods)
+                if (other.label == m->label) {
+                    std::cerr << "afb chart: method " << spec << " is listed twice\n";
+                    exitCode = 1;
+                    return;
+                }
+            chart.methods.push_back(std::move(*m));
+        }
+        for (double h : chart.heightsM)
+            if (!(h >= 0 && h <= 10000)) {
+                std::cerr << "afb chart: --heights: " << h << " is not in [0, 10000] m\n";
+                exitCode = 1;
+                return;
+            }
+        for (double hz : chart.hz)
+            if (!(hz >= 1 && hz <= 10000)) {
+                std::cerr << "afb chart: --hz: " << hz << " is not in [1, 10000]\n";
+                exitCode = 1;
+                return;
+            }
+        if (chart.heightsM.empty() || chart.hz.empty() || chart.methods.empty()) {
+            std::cerr << "afb chart: --heights, --hz and --methods need at least one value each\n";
+            exitCode = 1;
+            return;
+        }
+
+        text::Diagnostics diags;
+        auto lib = decl::Library::open(opt->base, diags);
+        std::vector<figure::Figure> figures;
+        std::vector<std::string> names;
+        for (const std::string& e : opt->entities) {
+            std::optional<figure::LoadedFigure> loaded;
+            if (lib) loaded = figure::loadEntityFigure(*lib, e, {}, diags);
+            if (!loaded) continue;
+            names.push_back(loaded->figure.name);
+            figures.push_back(std::move(loaded->figure));
+        }
+        printDiagnostics(diags);
+        if (diags.hasErrors() || figures.empty()) {
+            exitCode = 1;
+            return;
+        }
+        std::error_code ec;
+        std::filesystem::create_directories(opt->out, ec);
+        if (ec) {
+            std::cerr << "afb chart: cannot create " << opt->out.string() << ": " << ec.message() << "\n";
+            exitCode = 1;
+            return;
+        }
+
+        const std::size_t total =
+            figures.size() * chart.methods.size() * chart.heightsM.size() * chart.hz.size() * chart.repeats;
+        std::printf("afb chart: Bullet %s (%s), %zu runs on %d threads into %s\n", sim::bulletVersion().c_str(),
+                    sim::bulletPrecision(), total, chart.threads, opt->out.string().c_str());
+        std::fflush(stdout);
+        const auto start = std::chrono::steady_clock::now();
+        const bool tty = ::isatty(STDERR_FILENO) != 0;
+        const std::vector<sim::ChartRun> runs = sim::runChart(figures, chart, [&](int done, int all) {
+            if (tty)
+                drawProgress(done, all,
+                             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        });
+        const std::vector<sim::ChartPoint> points = sim::chartPoints(runs, names, chart.methods);
+        const sim::ChartBounds bounds{opt->maxAnchor, opt->maxLimit, opt->maxPenetration, opt->maxSettle};
+
+        std::ofstream(opt->out / "runs.csv") << sim::chartRunsCsv(runs);
+        const std::string summary = sim::chartSummaryMarkdown(points, chart, bounds, runs.size());
+        std::ofstream(opt->out / "summary.md") << summary;
+        std::string heights, rates;
+        for (double h : chart.heightsM) heights += (heights.empty() ? "" : ", ") + CLI::detail::to_string(h);
+        for (double hz : chart.hz) rates += (rates.empty() ? "" : ", ") + CLI::detail::to_string(hz);
+        const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", drops from " +
+                                     heights + " m at " + rates + " Hz, " + CLI::detail::to_string(chart.seconds) +
+                                     " s; errors: worst over the drops";
+        std::string plotError = writeChartPlot(opt->out, points, chart, subtitle);
+        if (plotError.empty()) plotError = runGnuplot(opt->out);
+        std::printf("\n%s", summary.c_str());
+        for (const sim::ChartPoint& p : points)
+            if (p.exploded) std::printf("note: %s exploded on %s\n", p.label.c_str(), p.figure.c_str());
+        if (!plotError.empty()) std::cerr << "afb chart: warning: no front.png/front.svg: " << plotError << "\n";
+        std::printf("\nwrote %s/{runs.csv,summary.md,front.gp,front.dat%s}\n", opt->out.string().c_str(),
+                    plotError.empty() ? ",front.png,front.svg" : "");
+    });
+}
+
+} // namespace afb::cli
