@@ -4,6 +4,7 @@
 //   BuildBodies.cpp     — shapes, mass properties, friction, contents (af-format §2.2, §3)
 //   BuildConstraints.cpp — constraint frames, limits and springs (§4)
 //   ContainedJoints.cpp — which body takes each joint's impacts (§5.3)
+//   Bounds.cpp          — hostile numbers: non-finite values, sizes, masses, inertia and friction bounds
 //   Findings.cpp        — findings on the built figure: limits the load pose exceeds, id's "behave weird or
 //                         explode" list
 #include <cstdint>
@@ -90,6 +91,15 @@ class Builder {
     Limit hingeRange(const decl::HingeLimit& h, double axisLength, const AfConstraint& c, const std::string& what);
     bool spring(const AfConstraint& c, FigureConstraint& out, const std::string& what);
 
+    // Bounds.cpp
+    void repair(const text::SourceLocation& at, const std::string& problem, const std::string& how);
+    void checkNumbers();
+    double thick(double extent, const text::SourceLocation& at, const std::string& what);
+    bool withinFigure(const Vector3d& p, const text::SourceLocation& at, const std::string& what);
+    void checkBodyBounds();
+    Vector3d inertiaFloor(Vector3d moments, const AfBody& b);
+    double clampFriction(double f, double max, const text::SourceLocation& at, const std::string& what);
+
     // Findings.cpp
     void lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what);
     void checkFigure();
@@ -97,6 +107,7 @@ class Builder {
     const decl::AfDecl& m_decl;
     const Skeleton& m_skel;
     UnitSystem m_units;
+    bool m_strict = false;
     text::Diagnostics& m_findings;
     std::vector<Work> m_work;
     Figure m_figure;
