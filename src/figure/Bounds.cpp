@@ -138,8 +138,15 @@ void Builder::checkBodyBounds() {
 
 // Principal moments (SI) with the inertia floor: a moment <= 0 is an error, one below kMinInertiaRatio of the
 // largest is raised to it.
-Vector3d Builder::inertiaFloor(Vector3d moments, const AfBody& b) {
+Vector3d Builder::inertiaFloor(Vector3d moments, double massKg, double radiusM, const AfBody& b) {
     const std::string what = "body '" + b.name + "'";
+    const double ceiling = kMaxInertiaOverMassRadius2 * massKg * radiusM * radiusM;
+    if (!(moments.maxCoeff() <= ceiling)) {
+        error(b.location, what + " has a principal moment of inertia " + fmt(moments.maxCoeff()) +
+                              " kg m^2, more than " + fmt(kMaxInertiaOverMassRadius2) + " x mass x radius^2 (" +
+                              fmt(ceiling) + ", inertiaScale): it cannot be simulated");
+        return moments;
+    }
     if (!(moments.minCoeff() > 0.0) || !moments.allFinite()) {
         error(b.location, what + " has principal moments of inertia " + fmt(moments.x()) + ", " + fmt(moments.y()) +
                               ", " + fmt(moments.z()) + " kg m^2 (inertiaScale): each must be > 0");

@@ -210,7 +210,9 @@ FigureBody Builder::finishBody(std::size_t k) {
     }
     out.volumeM3 = w.volume * s() * s() * s();
     out.massKg = w.mass;
-    out.inertiaKgM2 = inertiaFloor(moments * (s() * s()), b);
+    double radius = 0;
+    for (const Vector3d& p : out.shape.vertices) radius = std::max(radius, p.norm());
+    out.inertiaKgM2 = inertiaFloor(moments * (s() * s()), w.mass, radius, b);
     out.loadPose = {poseDoom.rotation, poseDoom.position * s()};
     if (out.joint >= 0) {
         const Transform& j = m_skel.loadPose()[static_cast<std::size_t>(out.joint)];

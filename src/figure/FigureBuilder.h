@@ -97,7 +97,7 @@ class Builder {
     double thick(double extent, const text::SourceLocation& at, const std::string& what);
     bool withinFigure(const Vector3d& p, const text::SourceLocation& at, const std::string& what);
     void checkBodyBounds();
-    Vector3d inertiaFloor(Vector3d moments, const AfBody& b);
+    Vector3d inertiaFloor(Vector3d moments, double massKg, double radiusM, const AfBody& b);
     double clampFriction(double f, double max, const text::SourceLocation& at, const std::string& what);
 
     // Findings.cpp

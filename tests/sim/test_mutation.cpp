@@ -206,6 +206,23 @@ TEST_CASE("a hair-thin bone is repaired, or refused under strict", "[mutation]")
     CHECK(strict.str().find("strict") != std::string::npos);
 }
 
+TEST_CASE("an inertiaScale of 1e30 is refused before it overflows the solver", "[mutation]") {
+    const std::vector<MutationTarget> targets = bundledTargets();
+    REQUIRE_FALSE(targets.empty());
+    const MutationTarget& humanoid = targets.front();
+    const std::size_t at = humanoid.afText.find("inertiaScale (");
+    REQUIRE(at != std::string::npos);
+    for (const NumberSpan& span : afb::test::numberSpans(humanoid.afText))
+        if (span.offset > at) {
+            const std::string huge = afb::test::mutate(humanoid.afText, {{span, "1e30"}});
+            afb::text::Diagnostics findings;
+            CHECK_FALSE(afb::test::buildVariant(humanoid, huge, false, findings));
+            CHECK(findings.str().find("x mass x radius^2") != std::string::npos);
+            CHECK(afb::test::runVariant(humanoid, huge) == MutationOutcome::Error);
+            break;
+        }
+}
+
 // The full sweep: every number of every bundled and corpus figure with every value, plus sampled pairs
 // (AFB_MUTATION_PAIRS per figure, default 200). AFB_MUTATION_ONLY=text keeps the figures whose label contains
 // it. Run with `afb_tests "[.full]" -s` (tens of minutes).

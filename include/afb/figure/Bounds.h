@@ -17,6 +17,9 @@ inline constexpr double kMaxBodyMassKg = 1.0e5;
 /// Smallest principal moment relative to the body's largest one. A smaller positive moment is raised to this
 /// fraction of the largest (an inertia floor, as Jolt's ragdoll Stabilize does); a moment <= 0 is an error.
 inline constexpr double kMinInertiaRatio = 1.0e-3;
+/// Largest principal moment as a multiple of mass × (the body's radius about its centre of mass)², which no
+/// solid exceeds; inertiaScale may add up to this factor, beyond it is an error (float overflows in the solver).
+inline constexpr double kMaxInertiaOverMassRadius2 = 100.0;
 /// Largest contact friction (Coulomb coefficient) and joint friction coefficient; larger values are clamped.
 inline constexpr double kMaxContactFriction = 10.0;
 inline constexpr double kMaxJointFriction = 10.0;
