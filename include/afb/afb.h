@@ -4,17 +4,20 @@
 //
 //   text::Diagnostics            every message as file:line:col: error|warning: text
 //   decl::Library                a content folder (af/, def/, models/) and entity resolution
+//   decl::parseAf                an .af text parsed in memory
 //   figure::loadEntityFigure     an entity's figure in SI units, with the engine's meaning and findings
-//   figure::bodiesFromJoints     body placements from an md5 pose (start a ragdoll from an animation)
+//   figure::bodyStatesFromAnimation  body poses and velocities from an md5anim time (start from an animation)
+//   figure::bodiesFromJoints     body placements from any md5 pose
 //   bullet::Method               how a ragdoll is simulated (presets fast, default, accurate, exact)
 //   bullet::RagdollWorld         a method's world-level knobs installed into your btDiscreteDynamicsWorld
 //   bullet::RagdollAsset         a figure's shared collision shapes
-//   bullet::Ragdoll              one live ragdoll in your world
+//   bullet::Ragdoll              one live ragdoll in your world (bullet::spawnOptionsFor: the entity's flags)
 //   pose::driveSkeleton          md5 joint transforms from the bodies, by the figure's mod rules
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Load.h"

@@ -7,6 +7,7 @@
 #include "PositionPass.h"
 
 #include <algorithm>
+#include <vector>
 
 #include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
@@ -19,20 +20,41 @@ namespace {
 // are not pushed apart and re-made every substep (which would feed jitter into the velocity solve).
 constexpr btScalar kContactSlopM = btScalar(0.002);
 constexpr btScalar kContactFraction = btScalar(0.5);
+// Errors below these are left alone (and a sweep that finds none ends the pass): a tenth of a millimetre and
+// a hundredth of a degree, well below what any metric reports, so a figure at rest or in free fall costs the
+// pass almost nothing.
+constexpr btScalar kAnchorToleranceM = btScalar(1e-4);
+constexpr btScalar kAngleToleranceRad = btScalar(2e-4);
 
-// One body as the pass sees it: immovable (world, static geometry, a game's own body) or a ragdoll body.
+// One body as the pass sees it: immovable (world, static geometry, another figure's or a game's body) or a body
+// of this ragdoll, whose pose the pass works on locally and writes back once, at the end of the pass.
 struct Side {
-    btRigidBody* body = nullptr;
+    btRigidBody* body = nullptr; ///< null: immovable
+    btVector3 x{0, 0, 0};        ///< centre of mass, world
+    btQuaternion q = btQuaternion::getIdentity();
+    btMatrix3x3 r = btMatrix3x3::getIdentity(); ///< rotation of q
+    btVector3 invInertiaLocal{0, 0, 0};
     btScalar invMass = 0;
-    btMatrix3x3 invInertia{0, 0, 0, 0, 0, 0, 0, 0, 0};
+    btMatrix3x3 invInertia{0, 0, 0, 0, 0, 0, 0, 0, 0}; ///< world
+    bool moved = false;
+
+    btTransform transform() const { return btTransform(r, x); }
+    void updateRotation() {
+        r.setRotation(q);
+        invInertia = r.scaled(invInertiaLocal) * r.transpose();
+    }
 };
 
 Side sideOf(btRigidBody* body) {
     Side s;
     if (body == nullptr || body->getInvMass() == 0) return s;
     s.body = body;
+    const btTransform& t = body->getCenterOfMassTransform();
+    s.x = t.getOrigin();
+    t.getBasis().getRotation(s.q);
     s.invMass = body->getInvMass();
-    s.invInertia = body->getInvInertiaTensorWorld();
+    s.invInertiaLocal = body->getInvInertiaDiagLocal();
+    s.updateRotation();
     return s;
 }
 
@@ -41,19 +63,17 @@ btMatrix3x3 skew(const btVector3& r) { return {0, -r.z(), r.y(), r.z(), 0, -r.x(
 // Moves a body by `dx` and turns it by the rotation vector `dtheta` (first order, renormalised).
 void move(Side& s, const btVector3& dx, const btVector3& dtheta) {
     if (s.body == nullptr) return;
-    btTransform t = s.body->getCenterOfMassTransform();
-    t.getOrigin() += dx;
-    btQuaternion q = t.getRotation();
+    s.x += dx;
     const btQuaternion dq(dtheta.x(), dtheta.y(), dtheta.z(), 0);
-    q += (dq * q) * btScalar(0.5);
-    q.normalize();
-    t.setRotation(q);
-    s.body->setCenterOfMassTransform(t); // also updates the world inverse inertia
-    s.invInertia = s.body->getInvInertiaTensorWorld();
+    s.q += (dq * s.q) * btScalar(0.5);
+    s.q.normalize();
+    s.updateRotation();
+    s.moved = true;
 }
 
 // Inverse effective mass of a point fixed in a body at offset r: Δ(point) = K·P for an impulse P at the point.
 btMatrix3x3 pointInvMass(const Side& s, const btVector3& r) {
+    if (s.body == nullptr) return {0, 0, 0, 0, 0, 0, 0, 0, 0};
     const btMatrix3x3 rx = skew(r);
     return btMatrix3x3::getIdentity() * s.invMass - rx * s.invInertia * rx;
 }
@@ -87,63 +107,74 @@ btVector3 turnOnto(const btVector3& from, const btVector3& to) {
     return c * (btAtan2(s, from.dot(to)) / s);
 }
 
+// A constraint's two frames in the world, from the pass's working poses.
+struct Frames {
+    btTransform a, b;
+};
+Frames framesOf(const Side& a, const Side& b, const std::pair<btTransform, btTransform>& local) {
+    return {a.transform() * local.first, b.body ? b.transform() * local.second : local.second};
+}
+
 // Anchor: the two anchor copies meet (sliders: only across the axis).
-void projectAnchor(Side& a, Side& b, const btTransform& fa, const btTransform& fb, bool slider) {
-    const btVector3 ra = fa.getOrigin() - (a.body ? a.body->getCenterOfMassPosition() : fa.getOrigin());
-    const btVector3 rb = fb.getOrigin() - (b.body ? b.body->getCenterOfMassPosition() : fb.getOrigin());
-    const btVector3 c = fb.getOrigin() - fa.getOrigin();
+bool projectAnchor(Side& a, Side& b, const Frames& f, bool slider) {
+    const btVector3 ra = f.a.getOrigin() - a.x;
+    const btVector3 rb = b.body ? f.b.getOrigin() - b.x : btVector3(0, 0, 0);
+    const btVector3 c = f.b.getOrigin() - f.a.getOrigin();
+    if (c.length2() < kAnchorToleranceM * kAnchorToleranceM) return false;
     const btMatrix3x3 k = pointInvMass(a, ra) + pointInvMass(b, rb);
     btVector3 p;
     if (slider) {
-        const btVector3 axis = fb.getBasis().getColumn(0);
+        const btVector3 axis = f.b.getBasis().getColumn(0);
         btVector3 n1, n2;
         btPlaneSpace1(axis, n1, n2);
         p = solveTwoRows(k, n1, n2, c.dot(n1), c.dot(n2));
     } else {
-        if (btFabs(k.determinant()) < SIMD_EPSILON) return;
+        if (btFabs(k.determinant()) < SIMD_EPSILON) return false;
         p = k.inverse() * c;
     }
     applyLinear(a, b, p, ra, rb);
+    return true;
 }
 
 // Full orientation lock (fixed, slider): frame A's rotation onto frame B's.
-void projectOrientation(Side& a, Side& b, const btMatrix3x3& frameA, const btMatrix3x3& frameB) {
+bool projectOrientation(Side& a, Side& b, const Frames& f) {
     btQuaternion q;
-    (frameB * frameA.transpose()).getRotation(q);
+    (f.b.getBasis() * f.a.getBasis().transpose()).getRotation(q);
     if (q.w() < 0) q = -q;
     const btScalar angle = q.getAngle();
-    if (angle < SIMD_EPSILON) return;
+    if (angle < kAngleToleranceRad) return false;
     const btVector3 delta = q.getAxis() * angle;
     const btMatrix3x3 k = a.invInertia + b.invInertia;
-    if (btFabs(k.determinant()) < SIMD_EPSILON) return;
+    if (btFabs(k.determinant()) < SIMD_EPSILON) return false;
     applyAngular(a, b, k.inverse() * delta);
+    return true;
 }
 
 // Hinge axes: frame A's Z onto frame B's Z, leaving the rotation about the axis free.
-void projectHingeAxis(Side& a, Side& b, const btMatrix3x3& frameA, const btMatrix3x3& frameB) {
-    const btVector3 za = frameA.getColumn(2), zb = frameB.getColumn(2);
+bool projectHingeAxis(Side& a, Side& b, const Frames& f) {
+    const btVector3 za = f.a.getBasis().getColumn(2), zb = f.b.getBasis().getColumn(2);
     const btVector3 delta = turnOnto(za, zb);
-    if (delta.isZero()) return;
+    if (delta.length2() < kAngleToleranceRad * kAngleToleranceRad) return false;
     btVector3 n1, n2;
     btPlaneSpace1(zb, n1, n2);
     applyAngular(a, b, solveTwoRows(a.invInertia + b.invInertia, n1, n2, delta.dot(n1), delta.dot(n2)));
+    return true;
 }
 
 // One limit row past its limit: turn the bodies back by the excess.
-void projectLimitRow(Side& a, Side& b, const LimitRow& row) {
-    if (row.excess <= 0) return;
+bool projectLimitRow(Side& a, Side& b, const LimitRow& row) {
+    if (row.excess <= kAngleToleranceRad) return false;
     const btScalar w = row.axisWorld.dot((a.invInertia + b.invInertia) * row.axisWorld);
-    if (w < SIMD_EPSILON) return;
+    if (w < SIMD_EPSILON) return false;
     applyAngular(a, b, row.axisWorld * (-row.excess / w));
+    return true;
 }
 
-void projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const btTransform& fa, const btTransform& fb,
-                  const btMatrix3x3& body2Basis) {
+bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body2Basis) {
     LimitRow rows[2];
     int n = 0;
-    const btMatrix3x3 body1Basis = a.body ? a.body->getCenterOfMassTransform().getBasis() : btMatrix3x3::getIdentity();
     if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
-        n = hingeRangeRow(fa.getBasis(), fb.getBasis(), static_cast<btScalar>(h->lowerRad),
+        n = hingeRangeRow(f.a.getBasis(), f.b.getBasis(), static_cast<btScalar>(h->lowerRad),
                           static_cast<btScalar>(h->upperRad), 0, rows[0]);
     } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
         btVector3 y, z;
@@ -151,67 +182,87 @@ void projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const btT
         btPlaneSpace1(axis, y, z);
         btMatrix3x3 basis;
         basis.setValue(axis.x(), y.x(), z.x(), axis.y(), y.y(), z.y(), axis.z(), y.z(), z.z());
-        n = directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
+        n = directionLimitRows(a.r * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
                                static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
     } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-        n = directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
-                               LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
-                               static_cast<btScalar>(p->halfAngle2Rad), 0, rows);
+        n = directionLimitRows(a.r * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2), LimitShape::Pyramid,
+                               static_cast<btScalar>(p->halfAngle1Rad), static_cast<btScalar>(p->halfAngle2Rad), 0,
+                               rows);
     }
-    for (int i = 0; i < n; ++i) projectLimitRow(a, b, rows[i]);
+    bool corrected = false;
+    for (int i = 0; i < n; ++i) corrected = projectLimitRow(a, b, rows[i]) || corrected;
+    return corrected;
 }
 
-void projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
-    const btTransform ta = a.body ? a.body->getCenterOfMassTransform() : btTransform::getIdentity();
-    const btTransform tb = b.body ? b.body->getCenterOfMassTransform() : btTransform::getIdentity();
+bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
     // Immovable sides keep the world points Bullet found; movable ones carry theirs along.
-    const btVector3 pa = a.body ? a.body->getWorldTransform() * cp.m_localPointA : cp.m_positionWorldOnA;
-    const btVector3 pb = b.body ? b.body->getWorldTransform() * cp.m_localPointB : cp.m_positionWorldOnB;
+    const btVector3 pa = a.body ? a.transform() * cp.m_localPointA : cp.m_positionWorldOnA;
+    const btVector3 pb = b.body ? b.transform() * cp.m_localPointB : cp.m_positionWorldOnB;
     const btVector3& n = cp.m_normalWorldOnB;
     const btScalar depth = -(pa - pb).dot(n) - kContactSlopM;
-    if (depth <= 0) return;
-    const btVector3 ra = pa - ta.getOrigin(), rb = pb - tb.getOrigin();
+    if (depth <= kAnchorToleranceM) return false;
+    const btVector3 ra = a.body ? pa - a.x : btVector3(0, 0, 0), rb = b.body ? pb - b.x : btVector3(0, 0, 0);
     const btVector3 ran = ra.cross(n), rbn = rb.cross(n);
     const btScalar w = a.invMass + b.invMass + ran.dot(a.invInertia * ran) + rbn.dot(b.invInertia * rbn);
-    if (w < SIMD_EPSILON) return;
+    if (w < SIMD_EPSILON) return false;
     applyLinear(a, b, n * (kContactFraction * depth / w), ra, rb);
+    return true;
 }
 
 } // namespace
 
-void positionSweep(Ragdoll& r, std::span<btPersistentManifold* const> manifolds, const MovableTest& movable) {
+void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const> manifolds) {
     const figure::Figure& f = r.figure();
-    for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
-        const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
-        if (c.type == figure::JointType::Spring) continue;
-        Side a = sideOf(&r.body(c.body1));
-        Side b = c.body2 >= 0 ? sideOf(&r.body(c.body2)) : Side{};
-        if (a.body == nullptr && b.body == nullptr) continue;
-        auto frames = [&] { return r.constraintFramesWorld(i); };
-        const btMatrix3x3 body2Basis =
-            c.body2 >= 0 ? r.body(c.body2).getCenterOfMassTransform().getBasis() : r.spawnTransform().getBasis();
-        if (!std::holds_alternative<std::monostate>(c.limit)) {
-            const auto [fa, fb] = frames();
-            projectLimit(a, b, c, fa, fb, body2Basis);
-        }
-        if (c.type == figure::JointType::Fixed || c.type == figure::JointType::Slider) {
-            const auto [fa, fb] = frames();
-            projectOrientation(a, b, fa.getBasis(), fb.getBasis());
-        } else if (c.type == figure::JointType::Hinge) {
-            const auto [fa, fb] = frames();
-            projectHingeAxis(a, b, fa.getBasis(), fb.getBasis());
-        }
-        const auto [fa, fb] = frames();
-        projectAnchor(a, b, fa, fb, c.type == figure::JointType::Slider);
-    }
+    std::vector<Side> bodies;
+    bodies.reserve(static_cast<std::size_t>(r.bodyCount()));
+    for (int i = 0; i < r.bodyCount(); ++i) bodies.push_back(sideOf(&r.body(i)));
+    Side world;
+    // The contacts' sides: this ragdoll's bodies by index, everything else immovable.
+    auto sideFor = [&](const btCollisionObject* o) -> Side* {
+        for (std::size_t i = 0; i < bodies.size(); ++i)
+            if (static_cast<const btCollisionObject*>(&r.body(static_cast<int>(i))) == o) return &bodies[i];
+        return nullptr;
+    };
+    struct ContactSides {
+        btPersistentManifold* manifold;
+        Side* a;
+        Side* b;
+    };
+    std::vector<ContactSides> contacts;
     for (btPersistentManifold* m : manifolds) {
-        auto* oa = const_cast<btCollisionObject*>(m->getBody0());
-        auto* ob = const_cast<btCollisionObject*>(m->getBody1());
-        Side a = movable.movable(oa) ? sideOf(btRigidBody::upcast(oa)) : Side{};
-        Side b = movable.movable(ob) ? sideOf(btRigidBody::upcast(ob)) : Side{};
-        if (a.body == nullptr && b.body == nullptr) continue;
-        for (int k = 0; k < m->getNumContacts(); ++k) projectContact(a, b, m->getContactPoint(k));
+        Side* a = sideFor(m->getBody0());
+        Side* b = sideFor(m->getBody1());
+        if (a || b) contacts.push_back({m, a, b});
     }
+    Side immovableA, immovableB;
+    const btMatrix3x3 spawnBasis = r.spawnTransform().getBasis();
+    for (int sweep = 0; sweep < sweeps; ++sweep) {
+        bool corrected = false;
+        for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
+            const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
+            if (c.type == figure::JointType::Spring) continue;
+            Side& a = bodies[static_cast<std::size_t>(c.body1)];
+            Side& b = c.body2 >= 0 ? bodies[static_cast<std::size_t>(c.body2)] : world;
+            if (a.body == nullptr && b.body == nullptr) continue;
+            const auto& local = r.constraintFramesLocal(i);
+            if (!std::holds_alternative<std::monostate>(c.limit))
+                corrected = projectLimit(a, b, c, framesOf(a, b, local), b.body ? b.r : spawnBasis) || corrected;
+            if (c.type == figure::JointType::Fixed || c.type == figure::JointType::Slider)
+                corrected = projectOrientation(a, b, framesOf(a, b, local)) || corrected;
+            else if (c.type == figure::JointType::Hinge)
+                corrected = projectHingeAxis(a, b, framesOf(a, b, local)) || corrected;
+            corrected = projectAnchor(a, b, framesOf(a, b, local), c.type == figure::JointType::Slider) || corrected;
+        }
+        for (const ContactSides& cs : contacts) {
+            Side& a = cs.a ? *cs.a : immovableA;
+            Side& b = cs.b ? *cs.b : immovableB;
+            for (int k = 0; k < cs.manifold->getNumContacts(); ++k)
+                corrected = projectContact(a, b, cs.manifold->getContactPoint(k)) || corrected;
+        }
+        if (!corrected) break; // nothing left to correct
+    }
+    for (Side& s : bodies)
+        if (s.moved) s.body->setCenterOfMassTransform(s.transform());
 }
 
 } // namespace afb::bullet::detail

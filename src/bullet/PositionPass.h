@@ -13,16 +13,10 @@ class Ragdoll;
 
 namespace detail {
 
-/// Decides whether the pass may move a collision object: only ragdoll bodies are moved (a game's own bodies
-/// and static geometry are treated as immovable).
-struct MovableTest {
-    virtual ~MovableTest() = default;
-    virtual bool movable(const btCollisionObject* object) const = 0;
-};
-
-/// One sweep over `ragdoll`: every joint's anchor, locked axes and limit, then every contact point of
-/// `manifolds` (those touching the ragdoll's bodies) deeper than the slop.
-void positionSweep(Ragdoll& ragdoll, std::span<btPersistentManifold* const> manifolds, const MovableTest& movable);
+/// `sweeps` sweeps over `ragdoll`: every joint's limit, locked axes and anchor, then every contact point of
+/// `manifolds` (those touching the ragdoll's bodies) deeper than the slop. Only the ragdoll's own bodies move;
+/// poses are written back to Bullet once, at the end.
+void positionPass(Ragdoll& ragdoll, int sweeps, std::span<btPersistentManifold* const> manifolds);
 
 } // namespace detail
 } // namespace afb::bullet

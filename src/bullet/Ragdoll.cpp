@@ -281,11 +281,10 @@ btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
 
 std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
     const FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
-    const btTransform a =
-        m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * toBt(c.frameInBody1);
+    const auto& [fa, fb] = m_frames[static_cast<std::size_t>(i)];
+    const btTransform a = m_bodies[static_cast<std::size_t>(c.body1)]->getCenterOfMassTransform() * fa;
     const btTransform b =
-        c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * toBt(c.frameInBody2)
-                     : frameOfBody2(c);
+        c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(c.body2)]->getCenterOfMassTransform() * fb : fb;
     return {a, b};
 }
 
@@ -299,6 +298,7 @@ void Ragdoll::addConstraints() {
         btRigidBody& b = other(c.body2);
         const btTransform fa = toBt(c.frameInBody1);
         const btTransform fb = frameOfBody2(c);
+        m_frames.emplace_back(fa, fb);
         // Directions fixed in body2 as Bullet sees body2's frame (world for the world).
         const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
         std::unique_ptr<btTypedConstraint> main;

@@ -83,11 +83,9 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
 }
 
 // After each substep's integration (Bullet runs actions then), the position pass over every ragdoll.
-class RagdollWorld::PositionAction : public btActionInterface, public detail::MovableTest {
+class RagdollWorld::PositionAction : public btActionInterface {
   public:
     explicit PositionAction(RagdollWorld& owner) : m_owner(owner) {}
-
-    bool movable(const btCollisionObject* o) const override { return owner(o) >= 0; }
 
     void updateAction(btCollisionWorld* world, btScalar dt) override {
         if (m_owner.m_ragdolls.empty()) return;
@@ -111,13 +109,11 @@ class RagdollWorld::PositionAction : public btActionInterface, public detail::Mo
     // How far a ragdoll body's surface can move in `dt` (0 for other objects): linear speed plus angular speed
     // times the shape's bounding radius, with a 25 % allowance for the acceleration within the step.
     btScalar reachOf(const btCollisionObject* o, btScalar dt) const {
-        if (owner(o) < 0) return 0;
+        const BodyOwner* owned = find(o);
         const btRigidBody* b = btRigidBody::upcast(o);
-        if (b == nullptr) return 0;
-        btVector3 centre;
-        btScalar radius = 0;
-        o->getCollisionShape()->getBoundingSphere(centre, radius);
-        const btScalar speed = b->getLinearVelocity().length() + b->getAngularVelocity().length() * radius;
+        if (owned == nullptr || b == nullptr) return 0;
+        const btScalar speed =
+            b->getLinearVelocity().length() + b->getAngularVelocity().length() * owned->boundingRadius;
         return btScalar(1.25) * speed * dt;
     }
 
@@ -137,18 +133,22 @@ class RagdollWorld::PositionAction : public btActionInterface, public detail::Mo
         for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
             Ragdoll& r = *m_owner.m_ragdolls[k];
             if (r.atRest()) continue;
-            for (int it = 0; it < iterations; ++it) detail::positionSweep(r, m_contacts[k], *this);
+            detail::positionPass(r, iterations, m_contacts[k]);
         }
     }
     void debugDraw(btIDebugDraw*) override {}
 
   private:
-    int owner(const btCollisionObject* o) const {
+    const BodyOwner* find(const btCollisionObject* o) const {
         const auto& v = m_owner.m_owners;
-        const auto it = std::lower_bound(v.begin(), v.end(), o, [](const auto& e, const btCollisionObject* key) {
-            return std::less<const btCollisionObject*>()(e.first, key);
+        const auto it = std::lower_bound(v.begin(), v.end(), o, [](const BodyOwner& e, const btCollisionObject* key) {
+            return std::less<const btCollisionObject*>()(e.body, key);
         });
-        return it != v.end() && it->first == o ? it->second : -1;
+        return it != v.end() && it->body == o ? &*it : nullptr;
+    }
+    int owner(const btCollisionObject* o) const {
+        const BodyOwner* owned = find(o);
+        return owned ? owned->ragdoll : -1;
     }
 
     RagdollWorld& m_owner;
@@ -184,10 +184,16 @@ void RagdollWorld::detach(Ragdoll& r) {
 void RagdollWorld::rebuildOwners() {
     m_owners.clear();
     for (std::size_t k = 0; k < m_ragdolls.size(); ++k)
-        for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i)
-            m_owners.emplace_back(&m_ragdolls[k]->body(i), static_cast<int>(k));
-    std::sort(m_owners.begin(), m_owners.end(),
-              [](const auto& x, const auto& y) { return std::less<const btCollisionObject*>()(x.first, y.first); });
+        for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i) {
+            const btCollisionObject& body = m_ragdolls[k]->body(i);
+            btVector3 centre;
+            btScalar radius = 0;
+            body.getCollisionShape()->getBoundingSphere(centre, radius);
+            m_owners.push_back({&body, static_cast<int>(k), radius});
+        }
+    std::sort(m_owners.begin(), m_owners.end(), [](const BodyOwner& x, const BodyOwner& y) {
+        return std::less<const btCollisionObject*>()(x.body, y.body);
+    });
 }
 
 } // namespace afb::bullet

@@ -149,6 +149,7 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
 
     Skeleton s;
     s.m_modelOffset = modelOffset;
+    s.m_rootTranslation = rootTranslation;
     const std::size_t n = mesh.joints.size();
     s.m_names.reserve(n);
     s.m_parents.reserve(n);

@@ -3,8 +3,7 @@
 #include <cstdio>
 #include <string_view>
 
-#include <afb/decl/AfParser.h>
-#include <afb/text/Diagnostics.h>
+#include <afb/afb.h>
 
 namespace {
 

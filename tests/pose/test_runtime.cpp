@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 
+#include "EntityFixture.h"
 #include "TestSupport.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
@@ -32,13 +33,7 @@ struct World {
 };
 
 afb::figure::LoadedFigure load(const std::filesystem::path& base, const std::string& entity) {
-    afb::text::Diagnostics diags;
-    std::optional<afb::figure::LoadedFigure> loaded;
-    if (auto lib = afb::decl::Library::open(base, diags))
-        loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
-    INFO(diags.str());
-    REQUIRE(loaded);
-    return std::move(*loaded);
+    return afb::test::loadEntity(entity, base);
 }
 
 // The sets a runtime test runs on: the bundled chain, plus the corpus' complete zsec sets when present.

@@ -4,7 +4,7 @@
 // that loses a preset's accuracy fails here (timings are never asserted).
 #include <catch2/catch.hpp>
 
-#include "TestSupport.h"
+#include "EntityFixture.h"
 #include "afb/bullet/Method.h"
 #include "afb/decl/Library.h"
 #include "afb/figure/Load.h"
@@ -12,15 +12,7 @@
 
 namespace {
 
-afb::figure::Figure bundled(const std::string& entity) {
-    afb::text::Diagnostics diags;
-    std::optional<afb::figure::LoadedFigure> loaded;
-    if (auto lib = afb::decl::Library::open(afb::test::sourceDir(), diags))
-        loaded = afb::figure::loadEntityFigure(*lib, entity, {}, diags);
-    INFO(diags.str());
-    REQUIRE(loaded);
-    return loaded->figure;
-}
+afb::figure::Figure bundled(const std::string& entity) { return afb::test::loadEntity(entity).figure; }
 
 struct Bounds {
     const char* preset;

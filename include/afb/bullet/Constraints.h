@@ -47,9 +47,6 @@ class DirectionLimitConstraint : public btTypedConstraint {
     void setParam(int, btScalar, int) override {}
     btScalar getParam(int, int) const override { return 0; }
 
-    /// The engine's LIMIT_ERROR_REDUCTION, the default of LimitRowPolicy::errorReduction.
-    static constexpr btScalar kErrorReduction = btScalar(0.3);
-
     /// Current violation, radians (0 when within the limit): the largest of the limit's angle excesses.
     btScalar violation() const;
 

@@ -8,6 +8,7 @@
 
 #include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 
 namespace afb::bullet {
@@ -37,6 +38,15 @@ struct SpawnOptions {
     /// Ragdoll::engineContactFriction() says whether it is.
     bool engineContactFriction = true;
 };
+
+/// Spawn options that carry what the loaded entity asks for: its "nodrop"/"sleep" flag as startAtRest, and
+/// `method`. Set the entity transform and collision filter on the result.
+inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Method& method = {}) {
+    SpawnOptions options;
+    options.method = method;
+    options.startAtRest = loaded.startAtRest;
+    return options;
+}
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
@@ -81,6 +91,11 @@ class Ragdoll {
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
     /// space now; at spawn the two coincide.
     std::pair<btTransform, btTransform> constraintFramesWorld(int i) const;
+    /// The constraint frame of figure constraint `i` in body1's frame, and in body2's frame (or in the world
+    /// for a world constraint), in Bullet's precision; fixed at spawn.
+    const std::pair<btTransform, btTransform>& constraintFramesLocal(int i) const {
+        return m_frames[static_cast<std::size_t>(i)];
+    }
 
     /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
     struct JointError {
@@ -132,7 +147,9 @@ class Ragdoll {
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
-    std::vector<btTypedConstraint*> m_main;                        ///< per figure constraint
+    std::vector<btTypedConstraint*> m_main;
+    std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
+                                                               ///< ///< per figure constraint
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
 };

@@ -65,8 +65,14 @@ class RagdollWorld {
     btDiscreteDynamicsWorld& m_world;
     Method m_method;
     EngineContactFriction m_friction;
-    std::vector<Ragdoll*> m_ragdolls;                               ///< in spawn order
-    std::vector<std::pair<const btCollisionObject*, int>> m_owners; ///< body → index into m_ragdolls, sorted
+    std::vector<Ragdoll*> m_ragdolls; ///< in spawn order
+    /// A ragdoll body: which ragdoll owns it and its bounding radius (for the speculative reach), fixed at spawn.
+    struct BodyOwner {
+        const btCollisionObject* body;
+        int ragdoll; ///< index into m_ragdolls
+        btScalar boundingRadius;
+    };
+    std::vector<BodyOwner> m_owners; ///< sorted by body
     std::unique_ptr<PositionAction> m_action;
 };
 

@@ -130,7 +130,9 @@ struct RestRules {
 struct Figure {
     std::string name;
     UnitSystem units;
-    Skeleton skeleton;                         ///< the md5 skeleton, Doom units (see Skeleton)
+    /// The md5 skeleton, kept in Doom units as the md5 files give it (see Skeleton; converting it is out of
+    /// scope). For joints in metres use figure::jointsInMetres and figure::jointsFromAnimation (Placement.h).
+    Skeleton skeleton;
     std::vector<FigureBody> bodies;            ///< body 0 is the origin body
     std::vector<FigureConstraint> constraints; ///< in decl order
     bool selfCollision = true;                 ///< the settings switch (§6.2)

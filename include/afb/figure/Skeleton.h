@@ -52,6 +52,9 @@ class Skeleton {
     int parent(int joint) const { return m_parents[static_cast<std::size_t>(joint)]; }
     /// The modelDef visual offset given to `build` (Doom units, model space).
     const Eigen::Vector3d& modelOffset() const { return m_modelOffset; }
+    /// How `build` placed the root joint in the load pose; any other animation frame is posed the same way
+    /// (the engine's animator applies one rule to every frame, af-format §2.1).
+    RootTranslation rootTranslation() const { return m_rootTranslation; }
 
     /// Model-space bind pose from the md5mesh `joints` block, as written (no model offset), Doom units.
     const std::vector<Transform>& bindPose() const { return m_bindPose; }
@@ -82,6 +85,7 @@ class Skeleton {
     std::vector<std::string> m_names;
     std::vector<int> m_parents;
     Eigen::Vector3d m_modelOffset = Eigen::Vector3d::Zero();
+    RootTranslation m_rootTranslation = RootTranslation::ReplacedByOffset;
     std::vector<Transform> m_bindPose;
     std::vector<Transform> m_loadPose;
     std::vector<Transform> m_afPoseLocal;

@@ -37,8 +37,6 @@ class Scene {
 
     /// Spawns a ragdoll of `asset`; `options.method` is replaced by the scene's method.
     bullet::Ragdoll& spawn(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options = {});
-    /// Removes every ragdoll.
-    void clear() { m_ragdolls.clear(); }
 
     /// Steps one frame of `dtSeconds` (the method's substeps inside).
     void step(double dtSeconds) { m_ragdollWorld->step(dtSeconds); }
