@@ -131,14 +131,22 @@ void Builder::buildConstraint(std::size_t i) {
         frame = {frameWithAxis(raw, 0), body1.loadPose.position};
         break;
     }
-    case JointType::Spring:
+    case JointType::Spring: {
         if (!spring(c, out, what)) return;
-        out.frameInBody1 = inBody(out.body1, {Matrix3d::Identity(), point(c.anchor)});
-        out.frameInBody2 = inBody(out.body2, {Matrix3d::Identity(), point(c.anchor2)});
+        // §4.7 defaults: a missing anchor is the model origin, usually far from its body (anchor1 written twice
+        // leaves anchor2 there), and the spring then pulls on a long lever.
+        for (const auto& [anchor, key] : {std::pair{&c.anchor, "anchor1"}, {&c.anchor2, "anchor2"}})
+            if (!*anchor)
+                warning(c.location, what + ": no " + key + "; the engine places it at the model origin (0, 0, 0)");
+        const Vector3d anchor1 = point(c.anchor), anchor2 = point(c.anchor2);
+        out.frameInBody1 = inBody(out.body1, {Matrix3d::Identity(), anchor1});
+        out.frameInBody2 = inBody(out.body2, {Matrix3d::Identity(), anchor2});
         if (farAway) return;
+        lintSpringAtLoadPose(out, (anchor2 - anchor1).norm(), what);
         out.disablesCollision = false;
         m_figure.constraints.push_back(std::move(out));
         return;
+    }
     }
     if (farAway) return;
     out.frameInBody1 = inBody(out.body1, frame);

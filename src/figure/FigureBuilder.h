@@ -5,8 +5,8 @@
 //   BuildConstraints.cpp — constraint frames, limits and springs (§4)
 //   ContainedJoints.cpp — which body takes each joint's impacts (§5.3)
 //   Bounds.cpp          — hostile numbers: non-finite values, sizes, masses, inertia and friction bounds
-//   Findings.cpp        — findings on the built figure: limits the load pose exceeds, id's "behave weird or
-//                         explode" list
+//   Findings.cpp        — findings on the built figure: limits and spring lengths the load pose exceeds, id's
+//                         "behave weird or explode" list
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -102,6 +102,7 @@ class Builder {
 
     // Findings.cpp
     void lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what);
+    void lintSpringAtLoadPose(const FigureConstraint& c, double lengthM, const std::string& what);
     void checkFigure();
 
     const decl::AfDecl& m_decl;

@@ -184,6 +184,10 @@ TEST_CASE("bundled figures survive a deterministic sample of numeric mutations",
     }
     INFO(tally.summary());
     CHECK(tally.bad() == 0);
+    // The sample reaches every good ending: a refusal, a repair that then simulates, and a clean run.
+    CHECK(tally.counts[MutationOutcome::Error] > 0);
+    CHECK(tally.counts[MutationOutcome::Repaired] > 0);
+    CHECK(tally.counts[MutationOutcome::Clean] > 0);
 }
 
 TEST_CASE("a hair-thin bone is repaired, or refused under strict", "[mutation]") {
