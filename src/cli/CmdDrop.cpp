@@ -102,7 +102,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             std::printf("%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", r.figure.c_str(),
                         r.bodies, r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps, r.maxAnchorErrorM,
                         r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
-                        r.exploded ? "YES" : "no",
+                        r.nonFinite  ? "NaN"
+                        : r.exploded ? "YES"
+                                     : "no",
                         r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
             if (r.exploded) exitCode = 1;
         }

@@ -103,7 +103,10 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
             out.r.awakeBodySteps += d.awakeBodyCount();
             for (const figure::BodyState& b : d.bodyStates()) {
                 const double speed = b.linearVelocity.norm();
-                if (!std::isfinite(speed) || !b.pose.position.allFinite() || speed > kExplodeSpeedMps) {
+                const bool finite = std::isfinite(speed) && b.pose.position.allFinite() &&
+                                    b.pose.rotation.allFinite() && b.angularVelocity.allFinite();
+                out.r.nonFinite = out.r.nonFinite || !finite;
+                if (!finite || speed > kExplodeSpeedMps) {
                     if (!out.r.exploded) out.r.explodedAtS = now;
                     out.r.exploded = true;
                 }
@@ -227,6 +230,7 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o) {
             r.maxSpeedMps = std::max(r.maxSpeedMps, p.maxSpeedMps);
             if (p.exploded && (!r.exploded || *p.explodedAtS < *r.explodedAtS)) r.explodedAtS = p.explodedAtS;
             r.exploded = r.exploded || p.exploded;
+            r.nonFinite = r.nonFinite || p.nonFinite;
             stepSeconds = std::max(stepSeconds, parts[w].stepSeconds); // worlds run side by side
         }
         for (double t : parts[w].restTimes) {

@@ -1,7 +1,7 @@
 #pragma once
 // Numeric mutation of `.af` text (issue 17): every number of a figure replaced by hostile values, each variant
-// parsed, built and simulated in a child process so that a crash is counted, not fatal. A variant must end in a
-// clean error, a reported repair, or a finite simulation.
+// parsed, built and dropped (as `afb drop` does) in a child process so that a crash is counted, not fatal. A
+// variant must end in a clean error, a reported repair, or a finite simulation.
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -19,6 +19,7 @@
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
+#include "afb/sim/Drop.h"
 #include "afb/sim/Scene.h"
 #include "afb/text/Files.h"
 #include "afb/text/Lexer.h"
@@ -121,32 +122,31 @@ inline bool sceneFinite(const sim::Scene& scene) {
     return true;
 }
 
-/// Runs one variant in this process: parse, build, spawn into a small world with a ground, 60 steps.
-inline MutationOutcome runVariant(const MutationTarget& target, const std::string& afText, bool strict = false) {
+/// Runs one variant in this process as `afb drop --steps <steps>` runs a figure (sim::runDrop: 1 m above a ground
+/// plane, the default method, the figure's rest rules).
+inline MutationOutcome runVariant(const MutationTarget& target, const std::string& afText, bool strict = false,
+                                  int steps = 60) {
     text::Diagnostics diagnostics;
     std::optional<figure::Figure> figure = buildVariant(target, afText, strict, diagnostics);
     if (!figure) return MutationOutcome::Error;
     bool repaired = false;
     for (const text::Diagnostic& d : diagnostics.items())
         if (d.message.find("repaired") != std::string::npos) repaired = true;
-    sim::Scene scene(bullet::Method{});
-    scene.spawn(bullet::RagdollAsset::create(std::move(*figure)));
-    for (int step = 0; step < 60; ++step) {
-        scene.step(1.0 / 60.0);
-        if (!sceneFinite(scene)) return MutationOutcome::NonFinite;
-    }
+    sim::DropOptions drop;
+    drop.steps = steps;
+    if (sim::runDrop(*figure, drop).nonFinite) return MutationOutcome::NonFinite;
     return repaired ? MutationOutcome::Repaired : MutationOutcome::Clean;
 }
 
 /// runVariant in a child process: a signal (or a hang past 20 s) is a Crash.
-inline MutationOutcome runVariantIsolated(const MutationTarget& target, const std::string& afText,
-                                          bool strict = false) {
+inline MutationOutcome runVariantIsolated(const MutationTarget& target, const std::string& afText, bool strict = false,
+                                          int steps = 60) {
     const pid_t pid = fork();
     if (pid == 0) {
         alarm(20);
-        _exit(static_cast<int>(runVariant(target, afText, strict)));
+        _exit(static_cast<int>(runVariant(target, afText, strict, steps)));
     }
-    if (pid < 0) return runVariant(target, afText, strict);
+    if (pid < 0) return runVariant(target, afText, strict, steps);
     int status = 0;
     waitpid(pid, &status, 0);
     if (WIFEXITED(status) && WEXITSTATUS(status) <= static_cast<int>(MutationOutcome::NonFinite))
