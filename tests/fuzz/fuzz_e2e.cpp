@@ -14,9 +14,8 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
+#include "afb/figure/Load.h"
 #include "afb/sim/Scene.h"
 #include "afb/text/Lexer.h"
 
@@ -35,18 +34,10 @@ void loadSkeletons() {
     const auto library = afb::decl::Library::open(AFB_SOURCE_DIR, d);
     if (!library) std::abort();
     for (const char* entity : {"humanoid", "chain", "props", "lamp", "buggy"}) {
-        const auto r = library->resolveEntity(entity, d);
-        if (!r) std::abort();
-        const auto mesh = afb::decl::loadMd5Mesh(r->meshPath, d);
-        const auto pose = afb::decl::loadMd5Anim(r->afPosePath, d);
-        if (!mesh || !pose) std::abort();
-        Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-        if (r->model.offset) offset = {r->model.offset->x, r->model.offset->y, r->model.offset->z};
-        const auto root = r->figureKey == "ragdoll" ? afb::figure::RootTranslation::ReplacedByOffset
-                                                    : afb::figure::RootTranslation::OffsetAdded;
-        auto skeleton = afb::figure::Skeleton::build(*mesh, *pose, offset, d, "fuzz", root);
-        if (!skeleton) std::abort();
-        g_skeletons[lower(r->figureName)] = std::make_shared<afb::figure::Skeleton>(std::move(*skeleton));
+        auto loaded = afb::figure::loadEntityFigure(*library, entity, {}, d);
+        if (!loaded) std::abort();
+        g_skeletons[lower(loaded->decl.name)] =
+            std::make_shared<afb::figure::Skeleton>(std::move(loaded->figure.skeleton));
     }
 }
 

@@ -16,9 +16,8 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"
-#include "afb/decl/Md5Anim.h"
-#include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
+#include "afb/figure/Load.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/Scene.h"
 #include "afb/text/Files.h"
@@ -154,8 +153,8 @@ inline MutationOutcome runVariantIsolated(const MutationTarget& target, const st
     return MutationOutcome::Crash;
 }
 
-/// The figures of the entities in a content folder (`af/`, `def/`, `models/`) whose figure builds unmutated,
-/// one target per entity's figure (the first entity naming it).
+/// The figures of the entities in a content folder (`af/`, `def/`, `models/`) that build unmutated, one target
+/// per figure (the first entity naming it), on the skeleton its entity gives it.
 inline std::vector<MutationTarget> entityTargets(const std::filesystem::path& baseDir,
                                                  const std::vector<std::string>& entities) {
     std::vector<MutationTarget> targets;
@@ -163,24 +162,16 @@ inline std::vector<MutationTarget> entityTargets(const std::filesystem::path& ba
     const std::optional<decl::Library> library = decl::Library::open(baseDir, diagnostics);
     if (!library) return targets;
     for (const std::string& entity : entities) {
-        const std::optional<decl::ResolvedEntity> r = library->resolveEntity(entity, diagnostics);
-        if (!r) continue;
+        std::optional<figure::LoadedFigure> loaded = figure::loadEntityFigure(*library, entity, {}, diagnostics);
+        if (!loaded) continue;
+        const std::string file = loaded->afFile.string(), name = loaded->decl.name;
         bool seen = false;
         for (const MutationTarget& t : targets)
-            if (t.afFile == r->figureFile.string() && text::equalsIgnoreCase(t.figureName, r->figureName)) seen = true;
-        if (seen) continue;
-        const auto mesh = decl::loadMd5Mesh(r->meshPath, diagnostics);
-        const auto pose = decl::loadMd5Anim(r->afPosePath, diagnostics);
-        if (!mesh || !pose) continue;
-        Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-        if (r->model.offset) offset = {r->model.offset->x, r->model.offset->y, r->model.offset->z};
-        const auto root = r->figureKey == "ragdoll" ? figure::RootTranslation::ReplacedByOffset
-                                                    : figure::RootTranslation::OffsetAdded;
-        auto skeleton = figure::Skeleton::build(*mesh, *pose, offset, diagnostics, r->afPosePath.string(), root);
-        const std::optional<std::string> text = text::readFile(r->figureFile, diagnostics);
-        if (!skeleton || !text) continue;
-        targets.push_back({r->figureFile.filename().string() + " " + r->figureName, r->figureFile.string(), *text,
-                           r->figureName, std::make_shared<figure::Skeleton>(std::move(*skeleton))});
+            if (t.afFile == file && text::equalsIgnoreCase(t.figureName, name)) seen = true;
+        const std::optional<std::string> afText = text::readFile(loaded->afFile, diagnostics);
+        if (seen || !afText) continue;
+        targets.push_back({loaded->afFile.filename().string() + " " + name, file, *afText, name,
+                           std::make_shared<figure::Skeleton>(std::move(loaded->figure.skeleton))});
     }
     return targets;
 }
