@@ -78,8 +78,9 @@ std::vector<MutationTarget> corpusTargets(const std::filesystem::path& corpus) {
         if (!af) continue;
         for (const auto& decl : af->decls) {
             bool covered = false;
-            for (const MutationTarget& t : targets)
-                if (t.afFile == file.string() && afb::text::equalsIgnoreCase(t.figureName, decl.name)) covered = true;
+            for (const MutationTarget& t : targets) // the library spells the corpus path its own way
+                if (std::filesystem::equivalent(t.afFile, file) && afb::text::equalsIgnoreCase(t.figureName, decl.name))
+                    covered = true;
             for (const MutationTarget& s : skeletons) {
                 if (covered) break;
                 MutationTarget t{file.filename().string() + " " + decl.name + " (on " + s.figureName + ")",
@@ -282,6 +283,9 @@ TEST_CASE("full numeric mutation sweep", "[.full][mutation-full]") {
         const char* v = std::getenv(name);
         return v ? std::strtoul(v, nullptr, 10) : fallback;
     };
+    std::ostringstream labels;
+    for (const MutationTarget& t : targets) labels << "\n  " << t.label;
+    WARN(targets.size() << " figures:" << labels.str());
     const std::size_t pairs = fromEnv("AFB_MUTATION_PAIRS", 200);
     const int steps = static_cast<int>(fromEnv("AFB_MUTATION_STEPS", 120));
     const char* only = std::getenv("AFB_MUTATION_ONLY");
