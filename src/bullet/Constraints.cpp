@@ -198,24 +198,50 @@ SpringConstraint::State SpringConstraint::state() const {
 
 btScalar SpringConstraint::length() const { return state().length; }
 
-btScalar SpringConstraint::force() const {
-    const State st = state();
-    if (st.length <= SIMD_EPSILON) return 0;
+SpringConstraint::Terms SpringConstraint::terms(const State& st) const {
+    Terms t;
+    if (st.length <= SIMD_EPSILON) return t;
     const btVector3 dv = m_rbB.getVelocityInLocalPoint(st.rb) - m_rbA.getVelocityInLocalPoint(st.ra);
-    const btScalar damping = m_params.damping * btFabs(dv.dot(st.n)) / st.length;
+    t.speed = btFabs(dv.dot(st.n));
+    t.damping = m_params.damping * t.speed / st.length;
     const btScalar rest = m_params.restLength;
-    if (st.length > rest) {
-        const btScalar stretch = st.length - rest;
-        return m_params.stretch > 0 ? m_params.stretch * stretch * stretch - damping : 0;
+    t.deviation = btFabs(st.length - rest);
+    const btScalar k = st.length > rest ? m_params.stretch : m_params.compress;
+    if (k > 0) {
+        t.sign = st.length > rest ? 1 : -1;
+        t.spring = k * t.deviation * t.deviation;
     }
-    const btScalar squeeze = rest - st.length;
-    return m_params.compress > 0 ? -(m_params.compress * squeeze * squeeze - damping) : 0;
+    return t;
+}
+
+btScalar SpringConstraint::force() const {
+    const Terms t = terms(state());
+    return t.sign * (t.spring - t.damping);
+}
+
+btScalar SpringConstraint::impulse(btScalar dt) const {
+    const State st = state();
+    const Terms t = terms(st);
+    if (t.sign == 0) return 0;
+    // The row's effective mass: the mass the two anchors present to an impulse along n.
+    auto angular = [&](const btRigidBody& body, const btVector3& r) {
+        const btVector3 arm = r.cross(st.n);
+        return arm.dot(body.getInvInertiaTensorWorld() * arm);
+    };
+    const btScalar inverseMass =
+        m_rbA.getInvMass() + m_rbB.getInvMass() + angular(m_rbA, st.ra) + angular(m_rbB, st.rb);
+    if (!(inverseMass > 0)) return t.sign * (t.spring - t.damping) * dt;
+    const btScalar mass = 1 / inverseMass;
+    const btScalar spring = btMin(t.spring * dt, mass * t.deviation / dt);
+    const btScalar damping = btMin(t.damping * dt, mass * t.speed);
+    return t.sign * (spring - damping);
 }
 
 void SpringConstraint::getInfo1(btConstraintInfo1* info) {
     const btScalar l = length();
     const bool lengthRow = l < m_params.minLength || (m_params.maxLength > 0 && l > m_params.maxLength);
-    info->m_numConstraintRows = (force() != 0 ? 1 : 0) + (lengthRow ? 1 : 0);
+    // The force row exists whenever the active side has a stiffness, so getInfo2 fills exactly these rows.
+    info->m_numConstraintRows = (terms(state()).sign != 0 ? 1 : 0) + (lengthRow ? 1 : 0);
     info->nub = 6 - info->m_numConstraintRows;
 }
 
@@ -240,8 +266,10 @@ void SpringConstraint::getInfo2(btConstraintInfo2* info) {
         ++row;
     };
     // The force as a pinned impulse: an impulse along −J pulls the anchors together, so F·dt goes on −n.
-    const btScalar impulse = force() / info->fps;
-    if (impulse != 0) setRow(-1, 0, impulse, impulse);
+    if (terms(st).sign != 0) {
+        const btScalar pull = impulse(1 / info->fps);
+        setRow(-1, 0, pull, pull);
+    }
     if (st.length < m_params.minLength)
         setRow(1, info->erp * info->fps * (m_params.minLength - st.length), 0, kInfinity);
     else if (m_params.maxLength > 0 && st.length > m_params.maxLength)

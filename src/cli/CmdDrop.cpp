@@ -29,7 +29,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         std::string json, csv;
         std::filesystem::path gltf;
         double gravity = 9.81;
-        bool doomGravity = false, noSleep = false;
+        bool doomGravity = false, noSleep = false, strict = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("entities", opt->entities, "entityDefs to drop")->required();
@@ -47,6 +47,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
     addMethodOptions(cmd, opt->method);
     cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
         ->check(CLI::IsMember({"float", "double"}));
+    cmd->add_flag("--strict", opt->strict, "Refuse values the builder would repair (README: hostile numbers)");
     cmd->add_flag("--no-sleep", opt->noSleep, "Never put figures to rest (the rest rules are off)");
     cmd->add_flag("--stop-at-rest", opt->drop.stopAtRest, "End a run when every instance is at rest");
     cmd->add_flag("--doom-gravity", opt->doomGravity, "Doom's gravity, 1066 units/s² (27.1 m/s²), instead of 9.81");
@@ -96,7 +97,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                     opt->drop.sleeping ? "on" : "off", units.gravityMps2, bullet::describe(opt->drop.method).c_str());
         for (const std::string& e : opt->entities) {
             std::optional<figure::LoadedFigure> loaded;
-            if (lib) loaded = figure::loadEntityFigure(*lib, e, units, diags);
+            if (lib) loaded = figure::loadEntityFigure(*lib, e, units, diags, opt->strict);
             if (!loaded) {
                 exitCode = 1;
                 continue;
@@ -135,7 +136,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             std::printf("%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", r.figure.c_str(),
                         r.bodies, r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps, r.maxAnchorErrorM,
                         r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
-                        r.exploded ? "YES" : "no",
+                        r.nonFinite  ? "NaN"
+                        : r.exploded ? "YES"
+                                     : "no",
                         r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
             if (r.exploded) exitCode = 1;
         }

@@ -112,6 +112,7 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
         std::vector<double> offset{0, 0, 0};
         double metresPerUnit = 0.0254;
         bool json = false;
+        bool strict = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("entity", opt->entity, "entityDef to resolve in --base (or use --af/--mesh/--pose)");
@@ -122,6 +123,7 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
     cmd->add_option("--pose", opt->pose, "The af_pose .md5anim (with --af)");
     cmd->add_option("--offset", opt->offset, "Model decl offset x y z, Doom units (with --af)")->expected(3);
     cmd->add_option("--unit", opt->metresPerUnit, "Metres per Doom unit")->capture_default_str();
+    cmd->add_flag("--strict", opt->strict, "Refuse values the builder would repair (README: hostile numbers)");
     cmd->add_flag("--json", opt->json,
                   "Print JSON: name, metresPerUnit, joints, totalMassKg, selfCollision, bodies[{name, joint, mod, "
                   "shape, vertices, volumeM3, massKg, centerOfMassM (model space), principalMomentsKgM2, "
@@ -140,10 +142,11 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
                 return;
             }
             loaded = figure::loadFigureFiles(opt->af, opt->name, opt->mesh, opt->pose,
-                                             {opt->offset[0], opt->offset[1], opt->offset[2]}, units, diags);
+                                             {opt->offset[0], opt->offset[1], opt->offset[2]}, units, diags,
+                                             figure::RootTranslation::OffsetAdded, opt->strict);
         } else if (!opt->entity.empty()) {
             if (auto lib = decl::Library::open(opt->base, diags))
-                loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags);
+                loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags, opt->strict);
         } else {
             std::cerr << "afb inspect: give an ENTITY (with --base) or --af, --mesh and --pose\n";
             exitCode = 1;

@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "FigureBuilder.h"
+#include "afb/figure/Bounds.h"
 #include "afb/figure/DoomMath.h"
 #include "afb/figure/MassProperties.h"
 #include "afb/text/Lexer.h"
@@ -21,9 +22,28 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
 
     const decl::AfShape shape = b.model.value_or(decl::AfShape{});
     const ShapeType type = shapeTypeOf(shape.kind);
-    const Vector3d v1 = eval(shape.v1, b.location, what);
-    const Vector3d v2 = eval(shape.v2, b.location, what);
+    Vector3d v1 = eval(shape.v1, b.location, what);
+    Vector3d v2 = eval(shape.v2, b.location, what);
     const Vector3d origin = b.origin ? eval(*b.origin, b.location, what) : Vector3d::Zero();
+    if (!withinFigure(v1, b.location, what + " shape bound") || !withinFigure(v2, b.location, what + " shape bound") ||
+        !withinFigure(origin, b.location, what + " origin"))
+        return;
+    // Bounds.h: positive extents thinner than the minimum thickness grow about their centre (a cone's height
+    // is v2.z − v1.z, §3.1).
+    if (type != ShapeType::Bone)
+        for (int i = 0; i < 3; ++i) {
+            const char* axisName[] = {"x", "y", "z"};
+            const double extent = v2[i] - v1[i];
+            const double grown = thick(extent, b.location, what + " " + axisName[i] + " extent");
+            if (grown == extent) continue;
+            if (type == ShapeType::Cone && i == 2) {
+                v1[i] = v2[i] - grown;
+            } else {
+                const double centre = 0.5 * (v1[i] + v2[i]);
+                v1[i] = centre - 0.5 * grown;
+                v2[i] = centre + 0.5 * grown;
+            }
+        }
     Matrix3d axis = Matrix3d::Identity();
     if (b.angles && type != ShapeType::Bone && b.angles->form == AfVector::Form::Literal)
         axis = anglesToRotation(b.angles->literal.x, b.angles->literal.y, b.angles->literal.z);
@@ -51,7 +71,12 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
             error(b.location, what + ": bone from v1 to v2 has zero length");
             return;
         }
-        w.polytope = makeBone(length, shape.width);
+        if (!(shape.width > 0.0)) {
+            error(b.location, what + ": bone width " + fmt(shape.width) + " must be > 0");
+            return;
+        }
+        w.polytope = makeBone(thick(length, b.location, what + " bone length"),
+                              thick(shape.width, b.location, what + " bone width"));
         axis = boneFrame(v1, v2);
         break;
     }
@@ -185,7 +210,9 @@ FigureBody Builder::finishBody(std::size_t k) {
     }
     out.volumeM3 = w.volume * s() * s() * s();
     out.massKg = w.mass;
-    out.inertiaKgM2 = moments * (s() * s());
+    double radius = 0;
+    for (const Vector3d& p : out.shape.vertices) radius = std::max(radius, p.norm());
+    out.inertiaKgM2 = inertiaFloor(moments * (s() * s()), w.mass, radius, b);
     out.loadPose = {poseDoom.rotation, poseDoom.position * s()};
     if (out.joint >= 0) {
         const Transform& j = m_skel.loadPose()[static_cast<std::size_t>(out.joint)];
@@ -195,7 +222,8 @@ FigureBody Builder::finishBody(std::size_t k) {
     const decl::BodyFriction f = friction(w);
     out.linearFrictionPerStep = f.linear;
     out.angularFrictionPerStep = f.angular;
-    out.contactFriction = f.contact;
+    out.contactFriction =
+        clampFriction(f.contact, kMaxContactFriction, b.location, "body '" + b.name + "': contact friction");
     const double stepsPerSecond = 1.0 / m_units.engineStepSeconds;
     out.linearDamping = 1.0 - std::pow(1.0 - f.linear, stepsPerSecond);
     out.angularDamping = 1.0 - std::pow(1.0 - f.angular, stepsPerSecond);

@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "FigureBuilder.h"
+#include "afb/figure/Bounds.h"
 #include "afb/figure/DoomMath.h"
 #include "afb/text/Lexer.h"
 
@@ -70,8 +71,11 @@ void Builder::buildConstraint(std::size_t i) {
     const FigureBody& body1 = m_figure.bodies[static_cast<std::size_t>(out.body1)];
     const Matrix3d ref =
         out.body2 >= 0 ? m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation : Matrix3d::Identity();
+    bool farAway = false;
     auto point = [&](const std::optional<AfVector>& v) -> Vector3d {
-        return (v ? eval(*v, c.location, what) : Vector3d::Zero()) * s();
+        const Vector3d p = v ? eval(*v, c.location, what) : Vector3d::Zero();
+        if (!withinFigure(p, c.location, what + " anchor")) farAway = true;
+        return p * s();
     };
     auto direction = [&](const std::optional<AfVector>& v, const char* key) -> std::optional<Vector3d> {
         const Vector3d d = v ? eval(*v, c.location, what) : Vector3d::Zero();
@@ -80,9 +84,14 @@ void Builder::buildConstraint(std::size_t i) {
         return std::nullopt;
     };
     out.friction = out.type == JointType::Fixed ? 0.0 : c.friction.value_or(0.5);
+    if (out.friction < 0.0) {
+        error(c.location, what + ": friction " + fmt(out.friction) + " is negative (it bounds a resisting force)");
+        return;
+    }
     if ((out.type == JointType::Slider || out.type == JointType::Spring) && c.friction && *c.friction != 0.0)
         warning(c.location, what + ": friction is parsed but never applied by the engine to this type");
     if (out.type == JointType::Slider || out.type == JointType::Spring) out.friction = 0.0;
+    out.friction = clampFriction(out.friction, kMaxJointFriction, c.location, what + ": joint friction");
 
     Transform frame; // model space, metres; origin = anchor
     switch (out.type) {
@@ -122,14 +131,24 @@ void Builder::buildConstraint(std::size_t i) {
         frame = {frameWithAxis(raw, 0), body1.loadPose.position};
         break;
     }
-    case JointType::Spring:
+    case JointType::Spring: {
         if (!spring(c, out, what)) return;
-        out.frameInBody1 = inBody(out.body1, {Matrix3d::Identity(), point(c.anchor)});
-        out.frameInBody2 = inBody(out.body2, {Matrix3d::Identity(), point(c.anchor2)});
+        // §4.7 defaults: a missing anchor is the model origin, usually far from its body (anchor1 written twice
+        // leaves anchor2 there), and the spring then pulls on a long lever.
+        for (const auto& [anchor, key] : {std::pair{&c.anchor, "anchor1"}, {&c.anchor2, "anchor2"}})
+            if (!*anchor)
+                warning(c.location, what + ": no " + key + "; the engine places it at the model origin (0, 0, 0)");
+        const Vector3d anchor1 = point(c.anchor), anchor2 = point(c.anchor2);
+        out.frameInBody1 = inBody(out.body1, {Matrix3d::Identity(), anchor1});
+        out.frameInBody2 = inBody(out.body2, {Matrix3d::Identity(), anchor2});
+        if (farAway) return;
+        lintSpringAtLoadPose(out, (anchor2 - anchor1).norm(), what);
         out.disablesCollision = false;
         m_figure.constraints.push_back(std::move(out));
         return;
     }
+    }
+    if (farAway) return;
     out.frameInBody1 = inBody(out.body1, frame);
     out.frameInBody2 = inBody(out.body2, frame);
     lintLimitAtLoadPose(out, what);
@@ -146,7 +165,14 @@ Limit Builder::limit(const AfConstraint& c, const FigureConstraint& out, const s
         error(c.location, what + ": the limit's shaft is a zero vector");
         return std::nullopt;
     };
+    // Apex angles are full angles of a cone or pyramid: [0, 360] degrees (§4.3); outside is no cone at all.
+    auto apexAngle = [&](double deg, const char* name) {
+        if (deg >= 0.0 && deg <= 360.0) return true;
+        error(c.location, what + ": " + name + " " + fmt(deg) + " deg is outside [0, 360] deg");
+        return false;
+    };
     if (const auto* cone = std::get_if<decl::ConeLimit>(&c.limit)) {
+        if (!apexAngle(cone->angleDeg, "the cone angle")) return std::monostate{};
         const Vector3d a = eval(cone->axis, c.location, what);
         const auto shaft = shaftOf(cone->shaft);
         if (!(a.norm() > 0.0) || !shaft) {
@@ -160,6 +186,9 @@ Limit Builder::limit(const AfConstraint& c, const FigureConstraint& out, const s
         return l;
     }
     if (const auto* pyr = std::get_if<decl::PyramidLimit>(&c.limit)) {
+        if (!apexAngle(pyr->angle1Deg, "the pyramid's first angle") ||
+            !apexAngle(pyr->angle2Deg, "the pyramid's second angle"))
+            return std::monostate{};
         const Vector3d a = eval(pyr->axis, c.location, what);
         const auto shaft = shaftOf(pyr->shaft);
         if (!(a.norm() > 0.0) || !shaft) {
@@ -219,6 +248,19 @@ bool Builder::spring(const AfConstraint& c, FigureConstraint& out, const std::st
     }
     // F = k·ΔL² in Doom units scales to SI as k/s; the damping term D = damping·v/L scales with s (§4.7).
     out.spring = {stretch / s(), compress / s(), damping * s(), rest * s(), minL * s(), maxL * s()};
+    const SpringParams& sp = out.spring;
+    if (sp.stretchNPerM2 > kMaxSpringStiffness || sp.compressNPerM2 > kMaxSpringStiffness ||
+        sp.dampingNs > kMaxSpringDamping) {
+        error(c.location, what + ": stiffness above " + fmt(kMaxSpringStiffness) + " N/m^2 or damping above " +
+                              fmt(kMaxSpringDamping) + " N s/m (stretch " + fmt(sp.stretchNPerM2) + ", compress " +
+                              fmt(sp.compressNPerM2) + ", damping " + fmt(sp.dampingNs) +
+                              "): so stiff a spring gains energy every step");
+        return false;
+    }
+    if (std::max({sp.restLengthM, sp.minLengthM, sp.maxLengthM}) > kMaxFigureExtentM) {
+        error(c.location, what + ": a spring length is above the " + fmt(kMaxFigureExtentM) + " m a figure may span");
+        return false;
+    }
     return true;
 }
 

@@ -55,7 +55,7 @@ static_assert(kContentsSolid == decl::kContentsSolid && kContentsPlayerClip == d
               kContentsCorpse == decl::kContentsCorpse);
 
 Builder::Builder(const FigureInput& in, text::Diagnostics& findings)
-    : m_decl(*in.decl), m_skel(*in.skeleton), m_units(in.units),
+    : m_decl(*in.decl), m_skel(*in.skeleton), m_units(in.units), m_strict(in.strict),
       m_findings(findings), m_figure{.name = in.decl->name,
                                      .units = in.units,
                                      .skeleton = *in.skeleton,
@@ -71,12 +71,16 @@ std::optional<Figure> Builder::build() {
     const decl::AfSettingsValues settings = m_decl.finalSettings();
     m_figure.selfCollision = settings.selfCollision;
     applyRestRules(settings);
+    checkNumbers();
+    if (m_findings.errorCount() > errorsBefore) return std::nullopt;
 
     std::vector<std::size_t> order = bodyOrder();
     if (m_findings.errorCount() > errorsBefore) return std::nullopt;
     for (std::size_t k = 0; k < order.size(); ++k) buildBody(order[k], k == 0);
     if (m_findings.errorCount() > errorsBefore) return std::nullopt;
     applyTotalMass(settings.totalMass);
+    checkBodyBounds();
+    if (m_findings.errorCount() > errorsBefore) return std::nullopt;
     for (std::size_t k = 0; k < m_work.size(); ++k) m_figure.bodies.push_back(finishBody(k));
     for (std::size_t i = 0; i < m_decl.constraints.size(); ++i) buildConstraint(i);
     if (m_findings.errorCount() > errorsBefore) return std::nullopt;

@@ -4,8 +4,9 @@
 //   BuildBodies.cpp     — shapes, mass properties, friction, contents (af-format §2.2, §3)
 //   BuildConstraints.cpp — constraint frames, limits and springs (§4)
 //   ContainedJoints.cpp — which body takes each joint's impacts (§5.3)
-//   Findings.cpp        — findings on the built figure: limits the load pose exceeds, id's "behave weird or
-//                         explode" list
+//   Bounds.cpp          — hostile numbers: non-finite values, sizes, masses, inertia and friction bounds
+//   Findings.cpp        — findings on the built figure: limits and spring lengths the load pose exceeds, id's
+//                         "behave weird or explode" list
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -90,13 +91,24 @@ class Builder {
     Limit hingeRange(const decl::HingeLimit& h, double axisLength, const AfConstraint& c, const std::string& what);
     bool spring(const AfConstraint& c, FigureConstraint& out, const std::string& what);
 
+    // Bounds.cpp
+    void repair(const text::SourceLocation& at, const std::string& problem, const std::string& how);
+    void checkNumbers();
+    double thick(double extent, const text::SourceLocation& at, const std::string& what);
+    bool withinFigure(const Vector3d& p, const text::SourceLocation& at, const std::string& what);
+    void checkBodyBounds();
+    Vector3d inertiaFloor(Vector3d moments, double massKg, double radiusM, const AfBody& b);
+    double clampFriction(double f, double max, const text::SourceLocation& at, const std::string& what);
+
     // Findings.cpp
     void lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what);
+    void lintSpringAtLoadPose(const FigureConstraint& c, double lengthM, const std::string& what);
     void checkFigure();
 
     const decl::AfDecl& m_decl;
     const Skeleton& m_skel;
     UnitSystem m_units;
+    bool m_strict = false;
     text::Diagnostics& m_findings;
     std::vector<Work> m_work;
     Figure m_figure;

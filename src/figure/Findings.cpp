@@ -1,5 +1,5 @@
-// Findings checked on the built figure at its load pose: limits that exclude it, and id's "behave weird or
-// explode" list.
+// Findings checked on the built figure at its load pose: limits and spring lengths that exclude it, and id's
+// "behave weird or explode" list.
 #include <algorithm>
 #include <map>
 
@@ -34,6 +34,18 @@ void Builder::lintLimitAtLoadPose(const FigureConstraint& c, const std::string& 
         warning(c.location, what + ": the limit [" + deg(hinge->lowerRad) + ", " + deg(hinge->upperRad) +
                                 "] deg excludes the load pose (0 deg): the joint is pushed into range at "
                                 "once");
+}
+
+// A spring whose load-pose length lies outside [minLength, maxLength] meets its length row at the first step,
+// which moves the bodies by the whole excess at once (§4.7).
+void Builder::lintSpringAtLoadPose(const FigureConstraint& c, double lengthM, const std::string& what) {
+    const SpringParams& sp = c.spring;
+    const bool tooShort = lengthM<sp.minLengthM, tooLong = sp.maxLengthM> 0 && lengthM > sp.maxLengthM;
+    if (!tooShort && !tooLong) return;
+    warning(c.location,
+            what + ": the anchors start " + fmt(lengthM) + " m apart, " +
+                (tooShort ? "below minLength " + fmt(sp.minLengthM) : "above maxLength " + fmt(sp.maxLengthM)) +
+                " m: the length row moves the bodies by the difference at once");
 }
 
 void Builder::checkFigure() {

@@ -12,7 +12,7 @@ std::optional<LoadedFigure> loadFigureFiles(const std::filesystem::path& afFile,
                                             const std::filesystem::path& meshFile,
                                             const std::filesystem::path& afPoseFile, const Eigen::Vector3d& offset,
                                             const UnitSystem& units, text::Diagnostics& diagnostics,
-                                            RootTranslation rootTranslation) {
+                                            RootTranslation rootTranslation, bool strict) {
     std::optional<decl::AfFile> af = decl::loadAf(afFile, diagnostics);
     std::optional<decl::Md5Mesh> mesh = decl::loadMd5Mesh(meshFile, diagnostics);
     std::optional<decl::Md5Anim> pose = decl::loadMd5Anim(afPoseFile, diagnostics);
@@ -32,13 +32,13 @@ std::optional<LoadedFigure> loadFigureFiles(const std::filesystem::path& afFile,
     std::optional<Skeleton> skeleton =
         Skeleton::build(*mesh, *pose, offset, diagnostics, afPoseFile.string(), rootTranslation);
     if (!skeleton) return std::nullopt;
-    std::optional<Figure> figure = buildFigure({chosen, &*skeleton, units}, diagnostics);
+    std::optional<Figure> figure = buildFigure({chosen, &*skeleton, units, strict}, diagnostics);
     if (!figure) return std::nullopt;
     return LoadedFigure{std::move(*figure), std::move(*mesh), *chosen, afFile};
 }
 
 std::optional<LoadedFigure> loadEntityFigure(const decl::Library& library, std::string_view entity,
-                                             const UnitSystem& units, text::Diagnostics& diagnostics) {
+                                             const UnitSystem& units, text::Diagnostics& diagnostics, bool strict) {
     const std::optional<decl::ResolvedEntity> r = library.resolveEntity(entity, diagnostics);
     if (!r) return std::nullopt;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
@@ -46,8 +46,8 @@ std::optional<LoadedFigure> loadEntityFigure(const decl::Library& library, std::
     // §2.1: actors ("ragdoll") replace the root translation by the offset; AF entities add it.
     const RootTranslation root =
         r->figureKey == "ragdoll" ? RootTranslation::ReplacedByOffset : RootTranslation::OffsetAdded;
-    std::optional<LoadedFigure> loaded =
-        loadFigureFiles(r->figureFile, r->figureName, r->meshPath, r->afPosePath, offset, units, diagnostics, root);
+    std::optional<LoadedFigure> loaded = loadFigureFiles(r->figureFile, r->figureName, r->meshPath, r->afPosePath,
+                                                         offset, units, diagnostics, root, strict);
     if (loaded) {
         auto on = [&](std::string_view key) {
             const std::optional<std::string> v = r->get(key);

@@ -136,7 +136,10 @@ Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, c
             const Doll& d = *dolls[k];
             for (const figure::BodyState& b : d.bodyStates()) {
                 const double speed = b.linearVelocity.norm();
-                if (!std::isfinite(speed) || !b.pose.position.allFinite() || speed > kExplodeSpeedMps) {
+                const bool finite = std::isfinite(speed) && b.pose.position.allFinite() &&
+                                    b.pose.rotation.allFinite() && b.angularVelocity.allFinite();
+                out.r.nonFinite = out.r.nonFinite || !finite;
+                if (!finite || speed > kExplodeSpeedMps) {
                     if (!out.r.exploded) out.r.explodedAtS = now;
                     out.r.exploded = true;
                 }
@@ -279,6 +282,7 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
             r.maxSpeedMps = std::max(r.maxSpeedMps, p.maxSpeedMps);
             if (p.exploded && (!r.exploded || *p.explodedAtS < *r.explodedAtS)) r.explodedAtS = p.explodedAtS;
             r.exploded = r.exploded || p.exploded;
+            r.nonFinite = r.nonFinite || p.nonFinite;
             stepSeconds = std::max(stepSeconds, parts[w].stepSeconds); // worlds run side by side
         }
         for (double t : parts[w].restTimes) {

@@ -58,6 +58,8 @@ const std::vector<Field>& fields() {
         {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
          [](const DropResult& r) { return json(r.exploded); }},
         {"exploded_at_s", "when it first exploded", [](const DropResult& r) { return optional(r.explodedAtS); }},
+        {"non_finite", "a body's pose or velocity became NaN or infinite (a runtime failure, never expected)",
+         [](const DropResult& r) { return json(r.nonFinite); }},
         {"settle_time_s", "every instance at rest by its figure's rules, else null",
          [](const DropResult& r) { return optional(r.settleTimeS); }},
     };

@@ -934,6 +934,28 @@ TEST_CASE("figure: springs (§4.7)", "[figure]") {
     }
 }
 
+TEST_CASE("figure findings: a spring without an anchor, or starting outside [minLength, maxLength] (§4.7)",
+          "[figure]") {
+    // Issue 17 (fuzz_e2e): `anchor1` written twice leaves anchor2 at the model origin, 50 units from anchor1
+    // (0, 0, 50); that is above maxLength 20, so the length row yanks the bodies at once.
+    const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
+	spring "twice" { body1 "chest" body2 "pelvis" anchor1 ( 0, 0, 60 ) anchor1 ( 0, 0, 50 ) stretch 10 compress 10
+		damping 1 restLength 10 minLength 5 maxLength 20 }
+	spring "short" { body1 "chest" body2 "pelvis" anchor1 ( 0, 0, 52 ) anchor2 ( 0, 0, 48 ) stretch 10 compress 10
+		damping 1 restLength 10 minLength 5 maxLength 20 }
+	spring "fine" { body1 "chest" body2 "pelvis" anchor1 ( 0, 0, 60 ) anchor2 ( 0, 0, 40 ) stretch 10 compress 10
+		damping 1 restLength 10 minLength 5 maxLength 20 }
+}
+)");
+    INFO(b.findings.str());
+    REQUIRE(b.figure);
+    CHECK(b.hasWarning("spring \"twice\"", "no anchor2; the engine places it at the model origin"));
+    CHECK(b.hasWarning("spring \"twice\"", "start 1.27 m apart, above maxLength 0.508 m")); // 50 and 20 units
+    CHECK(b.hasWarning("spring \"short\"", "below minLength"));
+    CHECK_FALSE(b.hasWarning("spring \"short\"", "no anchor"));
+    CHECK_FALSE(b.hasWarning("spring \"fine\""));
+}
+
 // --- collision filtering (§4.1, §6.2) --------------------------------------------------------------------------
 
 TEST_CASE("figure: selfCollisionPairs and attachedToWorld (§6.2)", "[figure]") {

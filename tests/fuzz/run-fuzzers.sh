@@ -9,7 +9,7 @@
 #   AFB_FUZZ_BUILD_DIR  fuzz build directory            (default: <repo>/build/fuzz)
 #   AFB_FUZZ_BIN_DIR    where the fuzz executables are   (default: <build>/bin, else <build>/tests/fuzz)
 #   AFB_CORPUS_DIR      real-world inputs used as seeds  (default: <repo>/../shared/data; skipped when absent)
-#   AFB_FUZZ_TARGETS    space-separated subset to run    (default: all five)
+#   AFB_FUZZ_TARGETS    space-separated subset to run    (default: all six)
 #   AFB_FUZZ_SEED       libFuzzer -seed (default: random; the log prints the one used)
 #
 # Seeds are assembled at run time inside the build directory (<build>/fuzz-run/seeds/<target>): copies of the
@@ -37,7 +37,7 @@ if [ -z "$bindir" ]; then
   done
 fi
 work="$build/fuzz-run"
-targets=(${AFB_FUZZ_TARGETS:-fuzz_lexer fuzz_af fuzz_def fuzz_md5mesh fuzz_md5anim})
+targets=(${AFB_FUZZ_TARGETS:-fuzz_lexer fuzz_af fuzz_def fuzz_md5mesh fuzz_md5anim fuzz_e2e})
 
 # Per target: the seed file extensions, the largest input libFuzzer may build, and the dictionary.
 declare -A exts=(
@@ -46,6 +46,7 @@ declare -A exts=(
   [fuzz_def]="def"
   [fuzz_md5mesh]="md5mesh"
   [fuzz_md5anim]="md5anim"
+  [fuzz_e2e]="af"
 )
 declare -A max_len=(
   [fuzz_lexer]=32768
@@ -53,6 +54,7 @@ declare -A max_len=(
   [fuzz_def]=32768
   [fuzz_md5mesh]=65536
   [fuzz_md5anim]=65536
+  [fuzz_e2e]=16384
 )
 declare -A dict=(
   [fuzz_lexer]=lexer.dict
@@ -60,6 +62,7 @@ declare -A dict=(
   [fuzz_def]=def.dict
   [fuzz_md5mesh]=md5mesh.dict
   [fuzz_md5anim]=md5anim.dict
+  [fuzz_e2e]=af.dict
 )
 
 for t in "${targets[@]}"; do
@@ -253,7 +256,10 @@ build_seeds() { # $1 = target; prints the number of seed files
   rm -rf "$dir"
   mkdir -p "$dir"
   write_builtin_seeds "$t" "$dir"
-  for root in "${seed_roots[@]}"; do
+  local roots=("${seed_roots[@]}")
+  # fuzz_e2e builds on the bundled skeletons: only the repository's own figures are seeds that build.
+  [ "$t" = fuzz_e2e ] && roots=("$repo/af")
+  for root in "${roots[@]}"; do
     for ext in ${exts[$t]}; do
       while IFS= read -r -d '' f; do
         rel="${f#"$root"/}"

@@ -110,6 +110,14 @@ class JointFrictionConstraint : public btTypedConstraint {
 /// above `maxLength` (when > 0). The force enters the solver as a row whose impulse is pinned to F·dt, so it is
 /// integrated exactly where gravity is (an impulse applied outside the step would meet Bullet's damping first and
 /// settle at F = m·g / damping factor instead of m·g).
+///
+/// Hostile numbers (issue 17): an explicit force is stable only while k·|ΔL|·dt² stays below about the effective
+/// mass of the row (the two bodies' inverse masses plus each anchor's lever arm through its inverse inertia). A
+/// spring far beyond its rest length on an anchor far from its body's centre (a missing anchor2 defaults to the
+/// model origin) exceeds that by orders of magnitude and overflows in a few steps. So each step's impulse is
+/// bounded: the spring term by the impulse that would close the whole ΔL in that one step, the damping term by the
+/// impulse that would stop the anchors' relative motion along the spring. Within the bounds (every bundled spring
+/// through a drop, tests/sim/test_hostile_springs.cpp) the engine's force is applied unchanged.
 class SpringConstraint : public btTypedConstraint {
   public:
     struct Params {
@@ -126,15 +134,27 @@ class SpringConstraint : public btTypedConstraint {
 
     /// Current anchor separation, metres.
     btScalar length() const;
-    /// The spring force along the anchors at the current state, N (> 0 pulls them together).
+    /// The engine's spring force along the anchors at the current state, N (> 0 pulls them together).
     btScalar force() const;
+    /// The impulse the spring applies in a step of `dt` seconds, N·s (> 0 pulls the anchors together): force()·dt
+    /// with its spring and damping terms bounded as the class comment says.
+    btScalar impulse(btScalar dt) const;
 
   private:
     struct State {
         btVector3 ra, rb, n;
         btScalar length;
     };
+    /// The engine's force split into its terms (§4.7): pulls together by sign·(spring − damping), N.
+    struct Terms {
+        btScalar sign = 0;      ///< +1 stretched, −1 compressed, 0 when the active side has no stiffness
+        btScalar spring = 0;    ///< k·ΔL², N
+        btScalar damping = 0;   ///< damping·|Δv·n|/L, N
+        btScalar deviation = 0; ///< |L − rest|, m
+        btScalar speed = 0;     ///< |Δv·n|, m/s
+    };
     State state() const;
+    Terms terms(const State& st) const;
     btVector3 m_anchorA, m_anchorB;
     Params m_params;
 };

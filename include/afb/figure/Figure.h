@@ -146,6 +146,9 @@ struct FigureInput {
     const decl::AfDecl* decl = nullptr; ///< the parsed figure
     const Skeleton* skeleton = nullptr; ///< the mesh skeleton with its af_pose load pose
     UnitSystem units;
+    /// Refuse instead of repair: every value outside Bounds.h that the builder would repair (with a warning)
+    /// is an error instead.
+    bool strict = false;
 };
 
 /// Builds a figure, reporting findings (§1–§6 silent engine fallbacks, id's "behave weird or explode" list) as

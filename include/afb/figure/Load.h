@@ -23,9 +23,11 @@ struct LoadedFigure {
 };
 
 /// Resolves `entity` in `library` (inherit chain, model decl, mesh, af_pose, figure) and builds its figure.
-/// Parse errors, resolution errors and figure findings all go to `diagnostics`; nullopt on any error.
+/// Parse errors, resolution errors and figure findings all go to `diagnostics`; nullopt on any error. `strict`:
+/// see FigureInput::strict.
 std::optional<LoadedFigure> loadEntityFigure(const decl::Library& library, std::string_view entity,
-                                             const UnitSystem& units, text::Diagnostics& diagnostics);
+                                             const UnitSystem& units, text::Diagnostics& diagnostics,
+                                             bool strict = false);
 
 /// Explicit files: a figure decl named `figureName` in `afFile` (the first decl when empty), on `meshFile` posed
 /// by `afPoseFile`, with the model decl's visual `offset` (Doom units).
@@ -33,6 +35,7 @@ std::optional<LoadedFigure> loadFigureFiles(const std::filesystem::path& afFile,
                                             const std::filesystem::path& meshFile,
                                             const std::filesystem::path& afPoseFile, const Eigen::Vector3d& offset,
                                             const UnitSystem& units, text::Diagnostics& diagnostics,
-                                            RootTranslation rootTranslation = RootTranslation::OffsetAdded);
+                                            RootTranslation rootTranslation = RootTranslation::OffsetAdded,
+                                            bool strict = false);
 
 } // namespace afb::figure

@@ -59,6 +59,9 @@ struct DropResult {
     double maxSpeedMps = 0;
     bool exploded = false;
     std::optional<double> explodedAtS;
+    /// A body's pose or velocity was NaN or infinite after some step: the runtime failed, whatever the figure
+    /// (issue 17: a figure that builds must simulate to finite state). Implies `exploded`.
+    bool nonFinite = false;
     std::optional<double> settleTimeS;
     double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz
     std::vector<JointPose> finalPose;         ///< first instance, model space
