@@ -56,10 +56,12 @@ struct Method {
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
     /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world.
     int positionIterations = 4;
-    /// Contact manifolds filled at first touch on planes: Bullet's convex–plane algorithm finds one point per
-    /// step by default, so a box landing flat is held at one corner and tips into the ground by up to a step's
-    /// travel; on, it adds perturbed points until the manifold has three. Sets the world's
-    /// btDefaultCollisionConfiguration (for every convex body against a plane in it, the game's too).
+    /// Full contact manifolds on planes: hulls and boxes against a static plane take their contact points from
+    /// the (up to four) vertices that come nearest the plane within the step, kept from step to step by vertex
+    /// (afbullet's own polytope–plane algorithm; Bullet's finds one point per step, and its manifold merges
+    /// speculative points into one another), so a body landing flat or rolling onto a face is held at its
+    /// corners; other convex shapes get Bullet's perturbed points. Registered in the world's dispatcher, so it
+    /// applies to every hull and box against a plane in that world, the game's too.
     bool multipointContacts = true;
     /// Speculative contacts: Bullet keeps a ragdoll body's contacts from as far as the body can travel in one
     /// substep, so the solver stops an approaching body at the surface instead of finding it inside one step
