@@ -11,7 +11,7 @@ namespace {
 
 constexpr std::array<std::string_view, 5> kPresetNames = {"fast", "default", "accurate", "exact", "legacy"};
 
-const std::array<MethodKnob, 17> kKnobs = {{
+const std::array<MethodKnob, 18> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -34,6 +34,10 @@ const std::array<MethodKnob, 17> kKnobs = {{
     {"ccd", "Continuous collision: off or fast-bodies", &Method::ccd},
     {"joint-warm-starting", "Joint rows start from their last impulse (on/off; needs a RagdollSolver)",
      &Method::jointWarmStarting},
+    {"direct-joints",
+     "Joints solved exactly per ragdoll each iteration; contacts and limits move the whole ragdoll "
+     "(on/off; needs a RagdollSolver)",
+     &Method::directJoints},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
@@ -75,7 +79,8 @@ std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 //    position pass;
 //  - every preset but legacy warm-starts joint rows (RagdollSolver) and takes plane contacts from the polytope's
 //    vertices;
-//  - they differ in substeps (the lever that cuts impact error most per unit of cost) and iterations.
+//  - they differ in substeps (the lever that cuts impact error most per unit of cost) and iterations, and exact
+//    solves the joints directly.
 std::optional<Method> methodPreset(std::string_view name) {
     Method m; // the default preset
     m.name = std::string(name);
@@ -100,10 +105,10 @@ std::optional<Method> methodPreset(std::string_view name) {
         return m;
     }
     if (name == "exact") {
-        m.substeps = 4;
-        m.iterations = 10;
-        m.jointIterations = 0;
-        m.positionIterations = 2;
+        // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
+        // against the whole ragdoll's mass. The former exact, four substeps of ten iterations, reached 11 mm / 9°
+        // at 1 m and 60 mm / 54° at 10 m for 0.94× this cost (README: Methods).
+        m.directJoints = true;
         return m;
     }
     return std::nullopt;

@@ -1,9 +1,525 @@
 // Warm-started joint rows (RagdollSolver.h).
 #include "afb/bullet/RagdollSolver.h"
 
+#include <algorithm>
+
+#include <Eigen/Dense>
+
 namespace afb::bullet {
 
-void RagdollSolver::track(const btTypedConstraint& constraint) { m_rows.try_emplace(&constraint); }
+// ---- Direct joint solve (Method::directJoints) --------------------------------------------------------------------
+//
+// The rows of the tracked constraints that have no bounds (a joint's anchor and locked axes) form, per connected
+// group of bodies (a ragdoll), a linear system (A + C) λ = e with A = J M⁻¹ Jᵀ: solved exactly (LDLᵀ, factored
+// once per solve), every joint of the group holds at the velocity level after each iteration whatever the other
+// rows did. Every other row touching the group (contacts, friction, limits, joint friction) is solved one at a
+// time as in Bullet, but its impulse moves the whole group as the joints let it: its response is
+// u = M⁻¹Jᵣᵀ − M⁻¹Jᵀ (A + C)⁻¹ J M⁻¹Jᵣᵀ (the joints' reaction included) and its effective mass is Jᵣ u. A foot
+// that lands then stops the body above it in one row update instead of one link per iteration (Baraff, "Linear-
+// time dynamics using Lagrange multipliers", 1996, for the block; this is its dense form, per ragdoll).
+namespace {
+
+using Vec = Eigen::VectorXd;
+using Mat = Eigen::MatrixXd;
+
+// One side of a row at one body: the linear and angular Jacobian and M⁻¹ times them (as Bullet stores them).
+struct SideJ {
+    btVector3 lin, ang;       // J
+    btVector3 linInv, angInv; // M⁻¹ Jᵀ: invMass ∘ lin (linear factor included), the row's angular component
+};
+
+SideJ sideA(const btSolverConstraint& c, const btSolverBody& b) {
+    return {c.m_contactNormal1, c.m_relpos1CrossNormal, c.m_contactNormal1 * b.internalGetInvMass(),
+            c.m_angularComponentA};
+}
+SideJ sideB(const btSolverConstraint& c, const btSolverBody& b) {
+    return {c.m_contactNormal2, c.m_relpos2CrossNormal, c.m_contactNormal2 * b.internalGetInvMass(),
+            c.m_angularComponentB};
+}
+
+double dot(const SideJ& row, const SideJ& other) { // J_row · M⁻¹ J_otherᵀ at a shared body
+    return double(row.lin.dot(other.linInv)) + double(row.ang.dot(other.angInv));
+}
+
+} // namespace
+
+struct RagdollSolver::Direct {
+    // A joint row of a group: its pool index and its two sides (side b absent for a body outside the group).
+    struct JointRow {
+        int pool;
+        int bodyA = -1, bodyB = -1; // local body indices, −1 when that side is not in the group
+        SideJ a{}, b{};
+    };
+    struct Group {
+        std::vector<int> bodies; // solver body ids
+        std::vector<JointRow> rows;
+        std::vector<std::vector<std::pair<int, int>>> rowsAt; // per local body: (joint row, side 0 = A / 1 = B)
+        Eigen::LDLT<Mat> ldlt;
+        Vec cfm;           // C's diagonal
+        Vec lambda;        // the rows' accumulated impulses (without the reactions to free rows unless `soft`)
+        bool soft = false; // a row has a cfm: its reactions are kept up to date (the block solve needs them)
+    };
+    // A row solved one at a time, with its response through the groups it touches.
+    struct FreeRow {
+        btSolverConstraint* c = nullptr;
+        int group[2] = {-1, -1};     // group of side A, of side B (−1: a plain body)
+        int response[2] = {-1, -1};  // offsets in `responses` (6 per group body), per distinct group
+        int reaction[2] = {-1, -1};  // offsets in `reactions` (one per group joint row)
+        double invEffectiveMass = 0; // 1 / (Jᵣ u + cfm′), 0: skip
+        double cfmVel = 0;           // the row's cfm in velocity units
+        double plain = 0;            // J M⁻¹ Jᵀ of the touching bodies alone (the row's scale)
+        btScalar start = 0;          // the row's impulse before the iterations (warm start)
+    };
+
+    bool enabled = false;
+    std::vector<Group> groups;
+    std::vector<int> groupOf, localOf; // per solver body
+    std::vector<FreeRow> nonContact, contact, friction;
+    std::vector<double> responses, reactions;
+    std::vector<char> bilateral; // per non-contact pool row: in a group's block
+
+    void clear() {
+        groups.clear();
+        nonContact.clear();
+        contact.clear();
+        friction.clear();
+        responses.clear();
+        reactions.clear();
+    }
+};
+
+void RagdollSolver::setDirectJoints(bool on) { m_direct->enabled = on; }
+bool RagdollSolver::directJoints() const { return m_direct->enabled; }
+
+bool RagdollSolver::buildDirect() {
+    Direct& d = *m_direct;
+    d.clear();
+    const int bodyCount = m_tmpSolverBodyPool.size();
+    d.groupOf.assign(static_cast<std::size_t>(bodyCount), -1);
+    d.localOf.assign(static_cast<std::size_t>(bodyCount), -1);
+    auto& pool = m_tmpSolverNonContactConstraintPool;
+    d.bilateral.assign(static_cast<std::size_t>(pool.size()), 0);
+    const btVector3 one(1, 1, 1);
+    auto dynamic = [&](int id) {
+        const btSolverBody& b = m_tmpSolverBodyPool[id];
+        return b.m_originalBody != nullptr && b.m_originalBody->getInvMass() > 0;
+    };
+    auto unit = [&](int id) {
+        const btSolverBody& b = m_tmpSolverBodyPool[id];
+        return b.m_linearFactor == one && b.m_angularFactor == one;
+    };
+    // Union–find over the bodies the unbounded rows of tracked constraints join.
+    std::vector<int> parent(static_cast<std::size_t>(bodyCount));
+    for (int i = 0; i < bodyCount; ++i) parent[static_cast<std::size_t>(i)] = i;
+    auto root = [&](int i) {
+        while (parent[static_cast<std::size_t>(i)] != i)
+            i = parent[static_cast<std::size_t>(i)] =
+                parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+        return i;
+    };
+    const btScalar unbounded = btScalar(1e30);
+    bool any = false;
+    for (int j = 0; j < pool.size(); ++j) {
+        const btSolverConstraint& c = pool[j];
+        if (c.m_lowerLimit > -unbounded || c.m_upperLimit < unbounded || c.m_jacDiagABInv == 0) continue;
+        const auto tracked = m_rows.find(static_cast<const btTypedConstraint*>(c.m_originalContactPoint));
+        if (tracked == m_rows.end() || !tracked->second.direct) continue;
+        const bool da = dynamic(c.m_solverBodyIdA), db = dynamic(c.m_solverBodyIdB);
+        if ((!da && !db) || (da && !unit(c.m_solverBodyIdA)) || (db && !unit(c.m_solverBodyIdB))) continue;
+        d.bilateral[static_cast<std::size_t>(j)] = 1;
+        any = true;
+        if (da && db) parent[static_cast<std::size_t>(root(c.m_solverBodyIdA))] = root(c.m_solverBodyIdB);
+    }
+    if (!any) return false;
+    // Groups, their bodies and their joint rows.
+    std::vector<int> groupOfRoot(static_cast<std::size_t>(bodyCount), -1);
+    auto groupFor = [&](int id) {
+        const int r = root(id);
+        int& g = groupOfRoot[static_cast<std::size_t>(r)];
+        if (g < 0) {
+            g = static_cast<int>(d.groups.size());
+            d.groups.emplace_back();
+        }
+        if (d.groupOf[static_cast<std::size_t>(id)] < 0) {
+            Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
+            d.groupOf[static_cast<std::size_t>(id)] = g;
+            d.localOf[static_cast<std::size_t>(id)] = static_cast<int>(group.bodies.size());
+            group.bodies.push_back(id);
+            group.rowsAt.emplace_back();
+        }
+        return g;
+    };
+    for (int j = 0; j < pool.size(); ++j) {
+        if (!d.bilateral[static_cast<std::size_t>(j)]) continue;
+        const btSolverConstraint& c = pool[j];
+        const bool da = dynamic(c.m_solverBodyIdA), db = dynamic(c.m_solverBodyIdB);
+        const int g = da ? groupFor(c.m_solverBodyIdA) : groupFor(c.m_solverBodyIdB);
+        if (da && db) groupFor(c.m_solverBodyIdB);
+        Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
+        Direct::JointRow row{j};
+        const int k = static_cast<int>(group.rows.size());
+        if (da) {
+            row.bodyA = d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)];
+            row.a = sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]);
+            group.rowsAt[static_cast<std::size_t>(row.bodyA)].push_back({k, 0});
+        }
+        if (db) {
+            row.bodyB = d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)];
+            row.b = sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]);
+            group.rowsAt[static_cast<std::size_t>(row.bodyB)].push_back({k, 1});
+        }
+        group.rows.push_back(row);
+    }
+    // A + C per group, factored.
+    for (Direct::Group& group : d.groups) {
+        const int n = static_cast<int>(group.rows.size());
+        Mat a = Mat::Zero(n, n);
+        for (const auto& at : group.rowsAt)
+            for (const auto& [r1, s1] : at)
+                for (const auto& [r2, s2] : at) {
+                    const Direct::JointRow& x = group.rows[static_cast<std::size_t>(r1)];
+                    const Direct::JointRow& y = group.rows[static_cast<std::size_t>(r2)];
+                    a(r1, r2) += dot(s1 ? x.b : x.a, s2 ? y.b : y.a);
+                }
+        group.cfm.resize(n);
+        double largest = 0;
+        for (int i = 0; i < n; ++i) largest = std::max(largest, a(i, i));
+        for (int i = 0; i < n; ++i) {
+            const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
+            group.cfm(i) = double(c.m_cfm) / double(c.m_jacDiagABInv);
+            // A joint loop makes A singular; a relative regularisation keeps the factor finite.
+            a(i, i) += group.cfm(i) + 1e-9 * largest;
+            group.soft = group.soft || group.cfm(i) != 0;
+        }
+        group.ldlt.compute(a);
+        group.lambda.resize(n);
+        for (int i = 0; i < n; ++i)
+            group.lambda(i) = double(pool[group.rows[static_cast<std::size_t>(i)].pool].m_appliedImpulse);
+    }
+    // The other rows, with their responses through the groups.
+    // Friction rows keep Bullet's response (the next block solve restores the joints they disturb): giving them
+    // the group's too tripled the rows that need one and changed no metric (README: Methods).
+    auto addFree = [&](std::vector<Direct::FreeRow>& out, btSolverConstraint& c, bool throughGroups) {
+        Direct::FreeRow fr;
+        fr.c = &c;
+        fr.start = c.m_appliedImpulse;
+        if (throughGroups) {
+            fr.group[0] = d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)];
+            fr.group[1] = d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)];
+        }
+        out.push_back(fr);
+    };
+    for (int j = 0; j < pool.size(); ++j)
+        if (!d.bilateral[static_cast<std::size_t>(j)]) addFree(d.nonContact, pool[j], true);
+    // A contact between two bodies of one group (a ragdoll touching itself) keeps Bullet's response too: the
+    // joints between the two often all but lock the contact's direction, and its effective mass through the group
+    // is then a thousand times the bodies' own; against a penetration bias that asks for a separation the joints
+    // forbid, such a row pumped impulses of kN·s into the joints (a humanoid came apart in the air after a 100 m
+    // drop).
+    for (int j = 0; j < m_tmpSolverContactConstraintPool.size(); ++j) {
+        btSolverConstraint& c = m_tmpSolverContactConstraintPool[j];
+        const int ga = d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)];
+        addFree(d.contact, c, ga < 0 || ga != d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)]);
+    }
+    for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j)
+        addFree(d.friction, m_tmpSolverContactFrictionConstraintPool[j], false);
+    // Per group, the columns J M⁻¹ Jᵣᵀ of every free row touching it, solved in one batch: Y = (A + C)⁻¹ G.
+    struct Column {
+        Direct::FreeRow* row;
+        int side; // the response slot (0: side A's group, which covers B too when it is the same group)
+        bool withA, withB;
+    };
+    std::vector<std::vector<Column>> columns(d.groups.size());
+    for (auto* list : {&d.nonContact, &d.contact, &d.friction})
+        for (Direct::FreeRow& fr : *list) {
+            btSolverConstraint& c = *fr.c;
+            if (c.m_jacDiagABInv == 0) continue; // invEffectiveMass 0: the row is skipped, as Bullet would
+            fr.cfmVel = double(c.m_cfm) / double(c.m_jacDiagABInv);
+            double w = fr.cfmVel;
+            fr.plain = 1.0 / double(c.m_jacDiagABInv);
+            for (int s = 0; s < 2; ++s) {
+                const int g = fr.group[s];
+                if (g < 0) { // a body of no group: Bullet's own response
+                    const SideJ side = s ? sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB])
+                                         : sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]);
+                    w += dot(side, side);
+                    continue;
+                }
+                if (s == 1 && fr.group[0] == g) continue; // one response covers both sides
+                columns[static_cast<std::size_t>(g)].push_back({&fr, s, fr.group[0] == g, fr.group[1] == g});
+            }
+            fr.invEffectiveMass = w; // completed below
+        }
+    for (std::size_t g = 0; g < d.groups.size(); ++g) {
+        Direct::Group& group = d.groups[g];
+        const std::vector<Column>& cols = columns[g];
+        const Eigen::Index k = static_cast<Eigen::Index>(group.rows.size());
+        Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
+        for (std::size_t col = 0; col < cols.size(); ++col) {
+            const btSolverConstraint& c = *cols[col].row->c;
+            auto gather = [&](int x, const SideJ& rs) {
+                for (const auto& [i, si] : group.rowsAt[static_cast<std::size_t>(x)]) {
+                    const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                    gm(i, static_cast<Eigen::Index>(col)) += dot(si ? jr.b : jr.a, rs);
+                }
+            };
+            if (cols[col].withA)
+                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)],
+                       sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]));
+            if (cols[col].withB)
+                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)],
+                       sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]));
+        }
+        const Mat y = group.ldlt.solve(gm);
+        for (std::size_t col = 0; col < cols.size(); ++col) {
+            Direct::FreeRow& fr = *cols[col].row;
+            const btSolverConstraint& c = *fr.c;
+            const int s = cols[col].side;
+            const Eigen::Index ci = static_cast<Eigen::Index>(col);
+            fr.reaction[s] = static_cast<int>(d.reactions.size());
+            d.reactions.insert(d.reactions.end(), y.col(ci).data(), y.col(ci).data() + k);
+            // u = M⁻¹Jᵣᵀ − M⁻¹Jᵀ y, per group body
+            const std::size_t off = d.responses.size();
+            fr.response[s] = static_cast<int>(off);
+            d.responses.resize(off + 6 * group.bodies.size(), 0.0);
+            double* u = d.responses.data() + off;
+            auto add = [&](int x, const btVector3& lin, const btVector3& ang, double f) {
+                for (int q = 0; q < 3; ++q) {
+                    u[6 * x + q] += f * double(lin[q]);
+                    u[6 * x + 3 + q] += f * double(ang[q]);
+                }
+            };
+            const int xa = cols[col].withA ? d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)] : -1;
+            const int xb = cols[col].withB ? d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)] : -1;
+            const SideJ sa = sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]);
+            const SideJ sb = sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]);
+            if (xa >= 0) add(xa, sa.linInv, sa.angInv, 1);
+            if (xb >= 0) add(xb, sb.linInv, sb.angInv, 1);
+            for (Eigen::Index i = 0; i < k; ++i) {
+                const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                const double yi = y(i, ci);
+                if (jr.bodyA >= 0) add(jr.bodyA, jr.a.linInv, jr.a.angInv, -yi);
+                if (jr.bodyB >= 0) add(jr.bodyB, jr.b.linInv, jr.b.angInv, -yi);
+            }
+            auto jdotu = [&](int x, const SideJ& rs) {
+                double v = 0;
+                for (int q = 0; q < 3; ++q)
+                    v += double(rs.lin[q]) * u[6 * x + q] + double(rs.ang[q]) * u[6 * x + 3 + q];
+                return v;
+            };
+            if (xa >= 0) fr.invEffectiveMass += jdotu(xa, sa);
+            if (xb >= 0) fr.invEffectiveMass += jdotu(xb, sb);
+        }
+    }
+    for (auto* list : {&d.nonContact, &d.contact, &d.friction})
+        for (Direct::FreeRow& fr : *list) {
+            if (fr.c->m_jacDiagABInv == 0) continue;
+            // A row the joints already hold (friction about a locked axis, a limit on a locked direction) has no
+            // effective mass left, only rounding: it is skipped rather than given an impulse of 1/rounding.
+            const double w = fr.invEffectiveMass; // the effective mass's inverse, summed above
+            fr.invEffectiveMass = w > 1e-6 * std::abs(fr.plain) ? 1.0 / w : 0.0;
+        }
+    return true;
+}
+
+btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal) {
+    Direct& d = *m_direct;
+    auto& pool = m_tmpSolverNonContactConstraintPool;
+    double residual = 0;
+    auto relVel = [&](const btSolverConstraint& c) {
+        const btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+        const btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+        return double(
+            c.m_contactNormal1.dot(a.m_deltaLinearVelocity) + c.m_relpos1CrossNormal.dot(a.m_deltaAngularVelocity) +
+            c.m_contactNormal2.dot(b.m_deltaLinearVelocity) + c.m_relpos2CrossNormal.dot(b.m_deltaAngularVelocity));
+    };
+    // The joints of every group, exactly.
+    for (Direct::Group& group : d.groups) {
+        const Eigen::Index n = static_cast<Eigen::Index>(group.rows.size());
+        Vec e(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
+            e(i) = double(c.m_rhs) / double(c.m_jacDiagABInv) - group.cfm(i) * group.lambda(i) - relVel(c);
+            residual = std::max(residual, e(i) * e(i));
+        }
+        const Vec dl = group.ldlt.solve(e);
+        if (!dl.allFinite()) continue;
+        group.lambda += dl;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+            const btScalar l = static_cast<btScalar>(dl(i));
+            const btSolverConstraint& c = pool[jr.pool];
+            if (jr.bodyA >= 0) {
+                btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+                b.m_deltaLinearVelocity += jr.a.linInv * l;
+                b.m_deltaAngularVelocity += jr.a.angInv * l;
+            }
+            if (jr.bodyB >= 0) {
+                btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+                b.m_deltaLinearVelocity += jr.b.linInv * l;
+                b.m_deltaAngularVelocity += jr.b.angInv * l;
+            }
+        }
+    }
+    // One free row: Bullet's update with the effective mass and the response of the whole group.
+    auto resolve = [&](Direct::FreeRow& fr) {
+        btSolverConstraint& c = *fr.c;
+        if (fr.invEffectiveMass == 0) return;
+        const double target =
+            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
+        double dl = (target - relVel(c)) * fr.invEffectiveMass;
+        const double sum = double(c.m_appliedImpulse) + dl;
+        if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
+        else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
+        if (dl == 0) return;
+        c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
+        residual = std::max(residual, dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass));
+        for (int s = 0; s < 2; ++s) {
+            const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
+            const int g = fr.group[s];
+            if (g < 0) {
+                btSolverBody& b = m_tmpSolverBodyPool[id];
+                if (s == 0)
+                    b.internalApplyImpulse(c.m_contactNormal1 * b.internalGetInvMass(), c.m_angularComponentA,
+                                           btScalar(dl));
+                else
+                    b.internalApplyImpulse(c.m_contactNormal2 * b.internalGetInvMass(), c.m_angularComponentB,
+                                           btScalar(dl));
+                continue;
+            }
+            if (fr.response[s] < 0) continue; // covered by side A's response
+            Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
+            const double* u = d.responses.data() + fr.response[s];
+            for (std::size_t x = 0; x < group.bodies.size(); ++x) {
+                btSolverBody& b = m_tmpSolverBodyPool[group.bodies[x]];
+                const double* ux = u + 6 * x;
+                b.m_deltaLinearVelocity += btVector3(btScalar(ux[0] * dl), btScalar(ux[1] * dl), btScalar(ux[2] * dl));
+                b.m_deltaAngularVelocity += btVector3(btScalar(ux[3] * dl), btScalar(ux[4] * dl), btScalar(ux[5] * dl));
+            }
+            if (group.soft) {
+                const double* y = d.reactions.data() + fr.reaction[s];
+                for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
+            }
+        }
+    };
+    for (Direct::FreeRow& fr : d.nonContact)
+        if (iteration < fr.c->m_overrideNumSolverIterations) resolve(fr);
+    if (iteration < infoGlobal.m_numIterations) {
+        for (Direct::FreeRow& fr : d.contact) resolve(fr);
+        for (Direct::FreeRow& fr : d.friction) {
+            const btScalar total = m_tmpSolverContactConstraintPool[fr.c->m_frictionIndex].m_appliedImpulse;
+            if (total <= 0) continue;
+            fr.c->m_lowerLimit = -(fr.c->m_friction * total);
+            fr.c->m_upperLimit = fr.c->m_friction * total;
+            resolve(fr);
+        }
+        for (int j = 0; j < m_tmpSolverContactRollingFrictionConstraintPool.size(); ++j) {
+            btSolverConstraint& c = m_tmpSolverContactRollingFrictionConstraintPool[j];
+            const btScalar total = m_tmpSolverContactConstraintPool[c.m_frictionIndex].m_appliedImpulse;
+            if (total <= 0) continue;
+            const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
+            c.m_lowerLimit = -magnitude;
+            c.m_upperLimit = magnitude;
+            const btScalar r = m_resolveSingleConstraintRowGeneric(m_tmpSolverBodyPool[c.m_solverBodyIdA],
+                                                                   m_tmpSolverBodyPool[c.m_solverBodyIdB], c);
+            residual = std::max(residual, double(r) * double(r));
+        }
+    }
+    return static_cast<btScalar>(residual);
+}
+
+void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGlobal) {
+    Direct& d = *m_direct;
+    for (int iteration = 0; iteration < infoGlobal.m_numIterations; ++iteration) {
+        double residual = 0;
+        for (Direct::FreeRow& fr : d.contact) {
+            btSolverConstraint& c = *fr.c;
+            if (fr.invEffectiveMass == 0 || c.m_rhsPenetration == 0) continue;
+            const btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+            const btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+            const double rel =
+                double(c.m_contactNormal1.dot(a.m_pushVelocity) + c.m_relpos1CrossNormal.dot(a.m_turnVelocity) +
+                       c.m_contactNormal2.dot(b.m_pushVelocity) + c.m_relpos2CrossNormal.dot(b.m_turnVelocity));
+            const double target = (double(c.m_rhsPenetration) - double(c.m_cfm) * double(c.m_appliedPushImpulse)) /
+                                  double(c.m_jacDiagABInv);
+            double dl = (target - rel) * fr.invEffectiveMass;
+            if (double(c.m_appliedPushImpulse) + dl < double(c.m_lowerLimit))
+                dl = double(c.m_lowerLimit) - double(c.m_appliedPushImpulse);
+            if (dl == 0) continue;
+            c.m_appliedPushImpulse += static_cast<btScalar>(dl);
+            residual = std::max(residual, dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass));
+            for (int s = 0; s < 2; ++s) {
+                const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
+                const int g = fr.group[s];
+                if (g < 0) {
+                    btSolverBody& body = m_tmpSolverBodyPool[id];
+                    if (s == 0)
+                        body.internalApplyPushImpulse(c.m_contactNormal1 * body.internalGetInvMass(),
+                                                      c.m_angularComponentA, btScalar(dl));
+                    else
+                        body.internalApplyPushImpulse(c.m_contactNormal2 * body.internalGetInvMass(),
+                                                      c.m_angularComponentB, btScalar(dl));
+                    continue;
+                }
+                if (fr.response[s] < 0) continue;
+                const Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
+                const double* u = d.responses.data() + fr.response[s];
+                for (std::size_t x = 0; x < group.bodies.size(); ++x) {
+                    btSolverBody& body = m_tmpSolverBodyPool[group.bodies[x]];
+                    const double* ux = u + 6 * x;
+                    body.m_pushVelocity += btVector3(btScalar(ux[0] * dl), btScalar(ux[1] * dl), btScalar(ux[2] * dl));
+                    body.m_turnVelocity += btVector3(btScalar(ux[3] * dl), btScalar(ux[4] * dl), btScalar(ux[5] * dl));
+                }
+            }
+        }
+        if (residual <= infoGlobal.m_leastSquaresResidualThreshold) break;
+    }
+}
+
+btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
+                                                          btPersistentManifold** manifoldPtr, int numManifolds,
+                                                          btTypedConstraint** constraints, int numConstraints,
+                                                          const btContactSolverInfo& infoGlobal,
+                                                          btIDebugDraw* debugDrawer) {
+    if (!m_direct->enabled || m_rows.empty() || !buildDirect())
+        return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(bodies, numBodies, manifoldPtr,
+                                                                                      numManifolds, constraints,
+                                                                                      numConstraints, infoGlobal,
+                                                                                      debugDrawer);
+    // Contact penetration (split impulse: velocities that move the bodies this step and are then forgotten),
+    // through the groups' responses too, so that lifting a foot out of the ground lifts the leg with it.
+    if (infoGlobal.m_splitImpulse) solveDirectSplitImpulse(infoGlobal);
+    const int iterations = std::max(m_maxOverrideNumSolverIterations, infoGlobal.m_numIterations);
+    for (int iteration = 0; iteration < iterations; ++iteration) {
+        m_leastSquaresResidual = solveDirectIteration(iteration, infoGlobal);
+        if (m_leastSquaresResidual <= infoGlobal.m_leastSquaresResidualThreshold) break;
+    }
+    // The joint rows' impulses (the block's and the reactions to the other rows) for warm starting and Bullet.
+    for (auto* list : {&m_direct->nonContact, &m_direct->contact, &m_direct->friction})
+        for (const Direct::FreeRow& fr : *list)
+            for (int s = 0; s < 2; ++s) {
+                if (fr.reaction[s] < 0) continue;
+                Direct::Group& group = m_direct->groups[static_cast<std::size_t>(fr.group[s])];
+                if (group.soft) continue;
+                const double dl = double(fr.c->m_appliedImpulse) - double(fr.start);
+                const double* y = m_direct->reactions.data() + fr.reaction[s];
+                for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
+            }
+    for (const Direct::Group& group : m_direct->groups)
+        for (std::size_t i = 0; i < group.rows.size(); ++i)
+            m_tmpSolverNonContactConstraintPool[group.rows[i].pool].m_appliedImpulse =
+                static_cast<btScalar>(group.lambda(static_cast<Eigen::Index>(i)));
+    return 0;
+}
+
+RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
+RagdollSolver::~RagdollSolver() = default;
+
+void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct) {
+    Tracked& t = m_rows[&constraint];
+    t.warmStart = warmStart;
+    t.direct = direct;
+}
 
 void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.erase(&constraint); }
 
@@ -16,10 +532,11 @@ void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstr
     for (int i = 0; i < numConstraints; ++i) {
         const int rows = m_tmpConstraintSizesPool[i].m_numConstraintRows;
         const auto it = m_rows.find(constraints[i]);
-        if (it != m_rows.end() && static_cast<int>(it->second.size()) == rows) {
+        if (it != m_rows.end() && it->second.warmStart && static_cast<int>(it->second.impulses.size()) == rows) {
             for (int k = 0; k < rows; ++k) {
                 btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[row + k];
-                const btScalar start = it->second[static_cast<std::size_t>(k)] * infoGlobal.m_warmstartingFactor;
+                const btScalar start =
+                    it->second.impulses[static_cast<std::size_t>(k)] * infoGlobal.m_warmstartingFactor;
                 c.m_appliedImpulse = btMax(c.m_lowerLimit, btMin(c.m_upperLimit, start));
                 if (c.m_appliedImpulse == 0) continue;
                 // As a solver iteration applies a row's impulse (resolveSingleConstraintRowGeneric).
@@ -46,7 +563,7 @@ btScalar RagdollSolver::solveGroupCacheFriendlyFinish(btCollisionObject** bodies
             if (c.m_originalContactPoint != current) {
                 current = c.m_originalContactPoint;
                 const auto it = m_rows.find(static_cast<const btTypedConstraint*>(current));
-                impulses = it != m_rows.end() ? &it->second : nullptr;
+                impulses = it != m_rows.end() ? &it->second.impulses : nullptr;
                 if (impulses) impulses->clear();
             }
             if (impulses) impulses->push_back(c.m_appliedImpulse);

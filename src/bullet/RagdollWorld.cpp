@@ -76,6 +76,8 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     info.m_warmstartingFactor = static_cast<btScalar>(m.warmStartingFactor);
     if (m.warmStarting) info.m_solverMode |= SOLVER_USE_WARMSTARTING;
     else info.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
+    if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver()))
+        solver->setDirectJoints(m.directJoints);
     // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.
     if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(world.getDispatcher()))
         if (auto* config = dynamic_cast<btDefaultCollisionConfiguration*>(dispatcher->getCollisionConfiguration())) {
@@ -179,7 +181,7 @@ void RagdollWorld::attach(Ragdoll& r) {
         for (int i = 0; i < r.bodyCount(); ++i)
             if (r.body(i).getUserIndex2() == kEngineFrictionMarker) r.body(i).setUserIndex2(kSpeculativeFrictionMarker);
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
-        solver != nullptr && r.method().jointWarmStarting)
+        solver != nullptr && (r.method().jointWarmStarting || r.method().directJoints))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
             // Limit rows are not warm-started: a speculative row is there before the limit is reached, and the
             // face of a pyramid it stands for can change from one step to the next with the same row count.
@@ -188,7 +190,7 @@ void RagdollWorld::attach(Ragdoll& r) {
             const btTypedConstraint& c = r.bulletConstraint(k);
             if (dynamic_cast<const DirectionLimitConstraint*>(&c) || dynamic_cast<const HingeRangeConstraint*>(&c))
                 continue;
-            solver->track(c);
+            solver->track(c, r.method().jointWarmStarting, r.method().directJoints);
         }
     m_ragdolls.push_back(&r);
     rebuildOwners();

@@ -315,3 +315,84 @@ TEST_CASE("joint warm starting: a hanging chain carries its weight without saggi
     CHECK(cold > 5e-3); // 16 mm here
     CHECK(warm < 1e-4);
 }
+
+TEST_CASE("direct joints: a chain of 1:10:100 masses swings with its joints held at one iteration",
+          "[bullet][methods]") {
+    // Three links of 0.2, 2 and 20 kg start horizontal from a world pivot and swing down. A sequential-impulse
+    // solve with one iteration cannot carry the heavy end's load up a light chain: the joints fly apart. The
+    // direct solve holds every joint exactly at the velocity level, so what remains is the drift of a rigid
+    // turn within one step (ω²·r·dt²/2, about a millimetre here), corrected by the joint ERP.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 100},
+                                                      {"b", 0, 20, 0, 100},
+                                                      {"c", 1, 40, 0, 100}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure chain {\n settings { selfCollision 0 }\n"
+        " body \"a\" { joint \"origin\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density "
+        "0.00125 containedJoints \"origin\" }\n"
+        " body \"b\" { joint \"b\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 20, 0, 100 ) density 0.0125 "
+        "containedJoints \"b\" }\n"
+        " body \"c\" { joint \"c\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 40, 0, 100 ) density 0.125 "
+        "containedJoints \"c\" }\n"
+        " ballAndSocketJoint \"top\" { body1 \"a\" body2 \"world\" anchor ( 0, 0, 100 ) friction 0 }\n"
+        " ballAndSocketJoint \"ab\" { body1 \"b\" body2 \"a\" anchor ( 20, 0, 100 ) friction 0 }\n"
+        " ballAndSocketJoint \"bc\" { body1 \"c\" body2 \"b\" anchor ( 40, 0, 100 ) friction 0 }\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    auto worstGap = [&](bool direct) {
+        Method m = legacy();
+        m.iterations = m.jointIterations = 1;
+        m.directJoints = direct;
+        ArmScene s(*built.figure, m, 9.81);
+        double worst = 0;
+        for (int i = 0; i < 60; ++i) {
+            s.scene.step(1.0 / 60.0);
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, s.anchorError(c));
+        }
+        return worst;
+    };
+    const double sequential = worstGap(false), direct = worstGap(true);
+    INFO("sequential impulse " << sequential << " m, direct " << direct << " m");
+    CHECK(sequential > 0.05);
+    CHECK(direct < 0.01);
+    CHECK(direct < sequential / 100);
+}
+
+TEST_CASE("direct joints: a body landing on a light foot is stopped through the joint in one step",
+          "[bullet][methods]") {
+    // A 50 kg block is fixed onto a 0.5 kg plate and the pair falls flat onto the ground at 3 m/s. Contact rows
+    // that see the plate's mass alone stop the plate and then, one iteration at a time, the block: the joint
+    // opens and the block sinks into the plate's place. Through the direct solve each contact row has the
+    // pair's mass at its corner: both stop in the step of impact and the joint stays closed.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 2}, {"top", 0, 0, 0, 4}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure pair {\n settings { selfCollision 0 }\n"
+        " body \"foot\" { joint \"origin\" model box( ( -10, -10, -1 ), ( 10, 10, 1 ) ) origin ( 0, 0, 2 ) density "
+        "0.000625 containedJoints \"origin\" }\n"
+        " body \"block\" { joint \"top\" model box( ( -10, -10, 0 ), ( 10, 10, 20 ) ) origin ( 0, 0, 3 ) density "
+        "0.0062 containedJoints \"top\" }\n"
+        " fixed \"ankle\" { body1 \"block\" body2 \"foot\" }\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    auto worstGap = [&](bool direct) {
+        Method m = legacy();
+        m.iterations = m.jointIterations = 4;
+        m.multipointContacts = true; // the plate lands on its four corners (one corner would just turn it)
+        m.ccd = afb::bullet::CcdPolicy::Off;
+        m.directJoints = direct;
+        afb::sim::Scene scene(m, {.gravityMps2 = 9.81});
+        Ragdoll& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        for (int i = 0; i < r.bodyCount(); ++i) r.body(i).setLinearVelocity(btVector3(0, 0, -3));
+        double worst = 0;
+        for (int i = 0; i < 10; ++i) {
+            scene.step(1.0 / 60.0);
+            worst = std::max(worst, r.jointError(0).anchorM);
+        }
+        return worst;
+    };
+    const double sequential = worstGap(false), direct = worstGap(true);
+    INFO("sequential impulse " << sequential << " m, direct " << direct << " m");
+    CHECK(sequential > 0.01);
+    CHECK(direct < 0.002);
+}

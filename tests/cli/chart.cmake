@@ -25,7 +25,8 @@ set(expected_columns
     max_speed_mps exploded exploded_at_s non_finite settle_time_s method.backend method.substeps method.iterations
     method.joint-iterations method.solver-tolerance method.split-impulse method.contact-erp method.joint-erp method.limit-erp
     method.warm-starting method.warm-starting-factor method.position-iterations method.multipoint-contacts
-    method.speculative-contacts method.speculative-limits method.ccd method.joint-warm-starting)
+    method.speculative-contacts method.speculative-limits method.ccd method.joint-warm-starting
+    method.direct-joints)
 string(REPLACE "," ";" columns "${header}")
 if(NOT columns STREQUAL expected_columns)
   message(FATAL_ERROR "runs.csv header:\n  ${header}\nexpected:\n  ${expected_columns}")

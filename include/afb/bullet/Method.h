@@ -87,6 +87,13 @@ struct Method {
     /// limits). Needs the world's solver to be a RagdollSolver (sim::Scene's is); with any other solver it has no
     /// effect.
     bool jointWarmStarting = true;
+    /// Direct joint solve: every solver iteration solves the figure's joints (anchors and locked axes) exactly, one
+    /// linear system per ragdoll, and each contact, friction and limit row moves the whole ragdoll as its joints
+    /// let it (its effective mass is the ragdoll's at that point, not the touching body's alone), so a landing foot
+    /// stops the body above it within the iteration instead of one link per iteration. Needs the world's solver to
+    /// be a RagdollSolver; set for the world by RagdollWorld from its method (a ragdoll takes part when its own
+    /// method has it on).
+    bool directJoints = false;
 
     friend bool operator==(const Method&, const Method&) = default;
 };

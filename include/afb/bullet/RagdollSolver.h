@@ -7,6 +7,7 @@
 // along the chain every step; what they fail to rebuild shows as joints that sag apart and limits that give.
 // This solver starts each tracked row from the world's warm-starting factor times its last impulse, as Bullet
 // does for contacts (README: Methods).
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -22,21 +23,50 @@ namespace afb::bullet {
 /// Bullet limit that engages or releases starts its rows from zero). One world, one thread.
 class RagdollSolver : public btSequentialImpulseConstraintSolver {
   public:
-    /// Warm-start `constraint`'s rows from now on (until untrack).
-    void track(const btTypedConstraint& constraint);
+    RagdollSolver();
+    ~RagdollSolver() override;
+    RagdollSolver(const RagdollSolver&) = delete;
+    RagdollSolver& operator=(const RagdollSolver&) = delete;
+
+    /// Track `constraint` from now on (until untrack): warm-start its rows (`warmStart`), and let the direct joint
+    /// solve take its unbounded rows (`direct`, see setDirectJoints).
+    void track(const btTypedConstraint& constraint, bool warmStart = true, bool direct = false);
     /// Forget `constraint` (call before it is destroyed).
     void untrack(const btTypedConstraint& constraint);
     /// How many constraints are tracked.
     std::size_t trackedCount() const { return m_rows.size(); }
+
+    /// The direct joint solve (Method::directJoints): each iteration solves the unbounded rows of the constraints
+    /// tracked with `direct` exactly, per connected group of bodies (an LDLᵀ factorisation of J M⁻¹ Jᵀ per group
+    /// and solve), and every other row touching a group (contacts, friction, limits, joint friction) moves the
+    /// whole group as its joints let it, with the group's effective mass at that row. Off: Bullet's iterations.
+    void setDirectJoints(bool on);
+    bool directJoints() const;
 
   protected:
     void convertJoints(btTypedConstraint** constraints, int numConstraints,
                        const btContactSolverInfo& infoGlobal) override;
     btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                            const btContactSolverInfo& infoGlobal) override;
+    btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
+                                               btPersistentManifold** manifoldPtr, int numManifolds,
+                                               btTypedConstraint** constraints, int numConstraints,
+                                               const btContactSolverInfo& infoGlobal,
+                                               btIDebugDraw* debugDrawer) override;
 
   private:
-    std::unordered_map<const btTypedConstraint*, std::vector<btScalar>> m_rows; ///< last impulse of every row
+    struct Tracked {
+        std::vector<btScalar> impulses; ///< last impulse of every row
+        bool warmStart = true;
+        bool direct = false;
+    };
+    struct Direct;
+    bool buildDirect();
+    btScalar solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal);
+    void solveDirectSplitImpulse(const btContactSolverInfo& infoGlobal);
+
+    std::unordered_map<const btTypedConstraint*, Tracked> m_rows;
+    std::unique_ptr<Direct> m_direct;
 };
 
 } // namespace afb::bullet
