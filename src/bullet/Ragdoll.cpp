@@ -317,10 +317,10 @@ void Ragdoll::addConstraints() {
     }
 }
 
-// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables.
+// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables, and the pairs its joints keep
+// apart anyway (RagdollAsset::prunedPairs).
 void Ragdoll::filterPairs() {
-    const figure::Figure& f = figure();
-    const std::vector<std::pair<int, int>> colliding = figure::selfCollisionPairs(f);
+    const std::vector<std::pair<int, int>>& colliding = m_asset->contactPairs();
     const int n = bodyCount();
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {
