@@ -10,6 +10,7 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/figure/Collision.h"
 #include "afb/figure/Limits.h"
+#include "afb/sim/Scene.h"
 
 using namespace afb;
 
@@ -148,4 +149,114 @@ TEST_CASE("economy: pruned pairs on the corpus figures never touch within the li
     AFB_REQUIRE_CORPUS(corpus);
     for (const char* entity : {"monster_zsec_machinegun", "monster_zsec_pistol"}) // 2 pairs each (README: Economy)
         CHECK(checkPruning(test::loadEntity(entity, corpus / "doom3-kroom3/base").figure, 600) > 0);
+}
+
+namespace {
+
+/// The figure's load pose standing on the ground (its lowest point 1 mm up) at (x, y).
+btTransform standing(const figure::Figure& f, double x, double y) {
+    double lowest = 1e9;
+    for (const figure::FigureBody& b : f.bodies)
+        for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, b.loadPose.apply(v).z());
+    return btTransform(btQuaternion::getIdentity(), btVector3(btScalar(x), btScalar(y), btScalar(0.001 - lowest)));
+}
+
+/// Pairs in the world's pair cache that involve a body of `r`.
+int pairsOf(sim::Scene& scene, const bullet::Ragdoll& r) {
+    int n = 0;
+    btOverlappingPairCache* cache = scene.world().getBroadphase()->getOverlappingPairCache();
+    for (int k = 0; k < cache->getNumOverlappingPairs(); ++k) {
+        const btBroadphasePair& p = cache->getOverlappingPairArray()[k];
+        for (int i = 0; i < r.bodyCount(); ++i)
+            if (p.m_pProxy0->m_clientObject == &r.body(i) || p.m_pProxy1->m_clientObject == &r.body(i)) ++n;
+    }
+    return n;
+}
+
+} // namespace
+
+TEST_CASE("economy: a ragdoll spawned at rest stays frozen, costs no pairs or constraints, never wakes by itself",
+          "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    const int constraintsBefore = scene.world().getNumConstraints();
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& r = scene.spawn(asset, o);
+    CHECK(r.atRest());
+    CHECK(r.frozen());
+    const std::vector<figure::Transform> before = r.bodyTransforms();
+    for (int s = 0; s < 600; ++s) scene.step(1.0 / 60);
+    CHECK(r.atRest());
+    CHECK(r.frozen());
+    CHECK(r.awakeBodyCount() == 0);
+    CHECK(scene.world().getNumConstraints() == constraintsBefore); // its constraints are out of the world
+    CHECK(pairsOf(scene, r) == 0);                                 // no pairs with the ground or itself
+    const std::vector<figure::Transform> after = r.bodyTransforms();
+    for (std::size_t i = 0; i < before.size(); ++i) {
+        CHECK(after[i].position == before[i].position);
+        CHECK(after[i].rotation == before[i].rotation);
+    }
+}
+
+TEST_CASE("economy: a frozen ragdoll wakes on an impulse, whole, with its mass and constraints back",
+          "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    const int constraintsBefore = scene.world().getNumConstraints();
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& r = scene.spawn(asset, o);
+    scene.step(1.0 / 60);
+    const auto& bodies = loaded.figure.bodies;
+    const auto headBody = std::find_if(bodies.begin(), bodies.end(), [](const auto& b) { return b.name == "head"; });
+    REQUIRE(headBody != bodies.end());
+    const int head = headBody->joint;
+    const int body = loaded.figure.jointBody[static_cast<std::size_t>(head)];
+    REQUIRE(body >= 0);
+    const btVector3 at = r.body(body).getCenterOfMassPosition();
+    CHECK_FALSE(r.applyImpulse(head, btVector3(btScalar(r.impulseThresholdNs() * 0.5), 0, 0), at));
+    CHECK(r.frozen());
+    CHECK(r.applyImpulse(head, btVector3(btScalar(r.impulseThresholdNs() * 4), 0, 0), at));
+    CHECK_FALSE(r.atRest());
+    CHECK_FALSE(r.frozen());
+    CHECK(scene.world().getNumConstraints() == constraintsBefore + r.bulletConstraintCount());
+    for (int i = 0; i < r.bodyCount(); ++i) {
+        const figure::FigureBody& b = loaded.figure.bodies[static_cast<std::size_t>(i)];
+        CHECK(r.body(i).getInvMass() == Approx(1.0 / b.massKg).epsilon(1e-6));
+        CHECK(r.body(i).getLocalInertia().x() == Approx(b.inertiaKgM2.x()).epsilon(1e-6));
+        CHECK(r.body(i).isActive());
+        CHECK_FALSE(r.body(i).isStaticOrKinematicObject());
+    }
+    const btVector3 start = r.body(body).getCenterOfMassPosition();
+    for (int s = 0; s < 10; ++s) scene.step(1.0 / 60);
+    CHECK(r.body(body).getCenterOfMassPosition().x() > start.x() + 0.01); // pushed along +X
+}
+
+TEST_CASE("economy: a frozen ragdoll wakes when a falling body lands on it", "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& resting = scene.spawn(asset, o);
+    // A second humanoid dropped onto the first from half a metre above its head.
+    bullet::SpawnOptions above;
+    above.entityTransform = o.entityTransform;
+    above.entityTransform.getOrigin() += btVector3(0.1f, 0, 2.3f);
+    bullet::Ragdoll& falling = scene.spawn(asset, above);
+    int wokeAt = -1;
+    for (int s = 0; s < 120 && wokeAt < 0; ++s) {
+        scene.step(1.0 / 60);
+        if (!resting.frozen()) wokeAt = s;
+    }
+    INFO("woke at step " << wokeAt);
+    CHECK(wokeAt > 10); // not before the faller got there (0.5 m of fall: about 19 steps)
+    CHECK_FALSE(falling.atRest());
+    CHECK_FALSE(resting.atRest());
 }
