@@ -279,11 +279,11 @@ void printRatios() {
         if (family.rfind("crowd", 0) == 0) continue;
         const auto raw = byLabel.find("raw");
         if (raw == byLabel.end() || raw->second <= 0) continue;
-        std::printf("\n%s: CPU µs per %s, and the ratio to raw (plain Bullet's defaults)\n", family.c_str(),
-                    family == "spawn"    ? "ragdoll (spawn + removal)"
-                    : family == "memory" ? "ragdoll: heap bytes per live instance, after one step (not µs)"
-                    : family == "rest"   ? "body-step (160 humanoids, 10 s, sleeping on)"
-                                         : "awake body-step (16 humanoids, 300 steps, sleeping off)");
+        std::printf("\n%s: %s, and the ratio to raw (plain Bullet's defaults)\n", family.c_str(),
+                    family == "spawn"    ? "CPU µs per ragdoll (spawn + removal)"
+                    : family == "memory" ? "heap bytes per live instance, after one step"
+                    : family == "rest"   ? "CPU µs per body-step (160 humanoids, 10 s, sleeping on)"
+                                         : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
         for (const auto& [label, value] : byLabel)
             std::printf("  %-20s %8.3f  %5.2fx raw\n", label.c_str(), value, value / raw->second);
         const auto equal = byLabel.find("raw:iterations=20");
