@@ -30,10 +30,10 @@ class Ragdoll::Action : public btActionInterface {
     double activeTime = 0;
 
     void updateAction(btCollisionWorld*, btScalar dt) override {
-        for (const Friction& f : frictions)
-            f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         if (atRest) {
-            // Bullet wakes sleeping bodies touched by active ones: then the figure wakes as a whole.
+            // Frozen (a RagdollWorld's): the world wakes it on contact. Asleep in a plain world: Bullet wakes
+            // sleeping bodies touched by active ones, and then the figure wakes as a whole.
+            if (m_owner.m_frozen) return;
             for (const auto& b : m_owner.m_bodies)
                 if (b->isActive()) {
                     wake();
@@ -41,6 +41,8 @@ class Ragdoll::Action : public btActionInterface {
                 }
             return;
         }
+        for (const Friction& f : frictions)
+            f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         activeTime += dt;
         if (m_comeToRest && m_rest.update(m_owner.m_bodies, dt, activeTime)) m_owner.putToRest();
     }
@@ -50,6 +52,7 @@ class Ragdoll::Action : public btActionInterface {
         atRest = false;
         activeTime = 0;
         m_rest.reset();
+        m_owner.thaw();
         for (const auto& b : m_owner.m_bodies) b->activate(true);
     }
 
@@ -74,6 +77,7 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
     : Ragdoll(std::move(asset), static_cast<btDynamicsWorld&>(world.world()), options) {
     m_manager = &world;
     world.attach(*this);
+    if (options.startAtRest) putToRest(); // frozen now that a RagdollWorld can wake it
 }
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
@@ -128,6 +132,53 @@ void Ragdoll::putToRest() {
         b->forceActivationState(ISLAND_SLEEPING);
     }
     m_action->atRest = true;
+    if (m_manager) freeze();
+}
+
+// A resting ragdoll of a RagdollWorld costs (almost) nothing per step: its constraints leave the world and its
+// bodies become static objects in the StaticFilter group that test no pairs against static objects (so neither
+// against the ground nor each other nor other resting ragdolls), until the world sees a contact with an active
+// body (RagdollWorld) or the ragdoll is woken. Bullet's own sleeping leaves every sleeping body and constraint in
+// its per-step loops, its island sort, and its pairs with the ground (README: Economy).
+void Ragdoll::freeze() {
+    if (m_frozen) return;
+    m_frozen = true;
+    m_frozenContact = {};
+    btDispatcher* dispatcher = m_world.getDispatcher();
+    for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
+        const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
+        const bool ours = std::any_of(m_bodies.begin(), m_bodies.end(), [&](const auto& b) {
+            return b.get() == m->getBody0() || b.get() == m->getBody1();
+        });
+        for (int c = 0; ours && c < m->getNumContacts(); ++c) {
+            const double depth = -static_cast<double>(m->getContactPoint(c).getDistance());
+            if (depth > m_frozenContact.depthM) m_frozenContact = {depth, m->getBody0(), m->getBody1()};
+        }
+    }
+    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
+    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+        btRigidBody& b = *m_bodies[i];
+        m_world.removeRigidBody(&b);
+        b.setMassProps(0, btVector3(0, 0, 0)); // sets CF_STATIC_OBJECT
+        b.updateInertiaTensor();
+        m_world.addRigidBody(&b, btBroadphaseProxy::StaticFilter, m_masks[i] & ~btBroadphaseProxy::StaticFilter);
+    }
+}
+
+void Ragdoll::thaw() {
+    if (!m_frozen) return;
+    m_frozen = false;
+    const figure::Figure& f = figure();
+    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+        btRigidBody& b = *m_bodies[i];
+        m_world.removeRigidBody(&b);
+        b.setMassProps(static_cast<btScalar>(f.bodies[i].massKg), toBt(f.bodies[i].inertiaKgM2));
+        b.updateInertiaTensor();
+        m_world.addRigidBody(&b, m_group, m_masks[i]);
+        b.setSleepingThresholds(0, 0);
+    }
+    for (std::size_t k = 0; k < m_constraints.size(); ++k)
+        m_world.addConstraint(m_constraints[k].get(), m_disablesCollision[k]);
 }
 
 void Ragdoll::wake() { m_action->wake(); }
@@ -141,6 +192,7 @@ Ragdoll::~Ragdoll() {
 
 void Ragdoll::addBodies(const SpawnOptions& options) {
     const figure::Figure& f = figure();
+    m_group = options.collisionGroup;
     for (std::size_t i = 0; i < f.bodies.size(); ++i) {
         const figure::FigureBody& b = f.bodies[i];
         btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(b.massKg), nullptr,
@@ -168,6 +220,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         }
         m_world.addRigidBody(body.get(), options.collisionGroup, mask);
         m_bodies.push_back(std::move(body));
+        m_masks.push_back(mask);
     }
 }
 
@@ -304,23 +357,27 @@ void Ragdoll::addConstraints() {
                 m_action->frictions.push_back({fr.get(), fb2.get(), static_cast<btScalar>(c.friction) * lever});
                 m_feedback.push_back(std::move(fb2));
                 m_constraints.push_back(std::move(main));
+                m_disablesCollision.push_back(c.disablesCollision);
                 m_world.addConstraint(fr.get(), false);
                 m_constraints.push_back(std::move(fr));
+                m_disablesCollision.push_back(false);
             } else {
                 m_constraints.push_back(std::move(main));
+                m_disablesCollision.push_back(c.disablesCollision);
             }
         }
         if (limit) {
             m_world.addConstraint(limit.get(), false);
             m_constraints.push_back(std::move(limit));
+            m_disablesCollision.push_back(false);
         }
     }
 }
 
-// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables.
+// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables, and the pairs its joints keep
+// apart anyway (RagdollAsset::prunedPairs).
 void Ragdoll::filterPairs() {
-    const figure::Figure& f = figure();
-    const std::vector<std::pair<int, int>> colliding = figure::selfCollisionPairs(f);
+    const std::vector<std::pair<int, int>>& colliding = m_asset->contactPairs();
     const int n = bodyCount();
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {

@@ -5,7 +5,9 @@
 
 #include <LinearMath/btGeometryUtil.h>
 
+#include "PairPruning.h"
 #include "afb/bullet/Convert.h"
+#include "afb/figure/Collision.h"
 #include "afb/figure/Polytope.h"
 
 namespace afb::bullet {
@@ -55,6 +57,10 @@ std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) 
         asset->m_margins.push_back(margin);
         asset->m_innerRadii.push_back(std::isfinite(inradius) ? inradius : 0.0);
     }
+    asset->m_prunedPairs = detail::unreachablePairs(asset->m_figure);
+    for (const auto& pair : figure::selfCollisionPairs(asset->m_figure))
+        if (!std::binary_search(asset->m_prunedPairs.begin(), asset->m_prunedPairs.end(), pair))
+            asset->m_contactPairs.push_back(pair);
     return asset;
 }
 

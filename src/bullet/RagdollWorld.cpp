@@ -34,6 +34,10 @@ bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* 
     return true;
 }
 
+// A contact point this close (metres; a speculative contact stops an approaching body at about 0) wakes a frozen
+// ragdoll.
+constexpr double kWakeDistanceM = 0.01;
+
 // The farthest a speculative contact reaches, metres: beyond it, continuous collision takes over.
 constexpr double kMaxSpeculativeM = 0.5;
 
@@ -97,9 +101,42 @@ class RagdollWorld::PositionAction : public btActionInterface {
 
     void updateAction(btCollisionWorld* world, btScalar dt) override {
         if (m_owner.m_ragdolls.empty()) return;
+        wakeTouched(world);
         const int iterations = m_owner.m_method.positionIterations;
         if (iterations > 0) positionPass(world, iterations);
         if (m_owner.m_method.speculativeContacts) widenContacts(world, dt);
+    }
+
+    // A frozen ragdoll (Ragdoll::frozen) wakes when an active object moving faster than the figure's rest speed
+    // touches one of its bodies: a contact point within kWakeDistanceM. Woken after the pass over the manifolds, since
+    // waking re-adds its bodies.
+    void wakeTouched(btCollisionWorld* world) {
+        m_toWake.clear();
+        btDispatcher* dispatcher = world->getDispatcher();
+        btPersistentManifold** manifolds = dispatcher->getInternalManifoldPointer();
+        for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
+            const btPersistentManifold* m = manifolds[i];
+            if (m->getNumContacts() == 0) continue;
+            for (const auto& [resting, toucher] :
+                 {std::pair{m->getBody0(), m->getBody1()}, {m->getBody1(), m->getBody0()}}) {
+                if (!toucher->isActive() || !resting->isStaticObject()) continue;
+                const int r = owner(resting);
+                if (r < 0 || !m_owner.m_ragdolls[static_cast<std::size_t>(r)]->frozen()) continue;
+                // A toucher slower than the frozen figure's own rest speed does not wake it (two ragdolls coming to
+                // rest against each other would wake each other in turn forever).
+                if (const btRigidBody* b = btRigidBody::upcast(toucher);
+                    b && b->getLinearVelocity().length() <
+                             m_owner.m_ragdolls[static_cast<std::size_t>(r)]->figure().rest.linearSpeedMps)
+                    continue;
+                bool touching = false;
+                for (int c = 0; c < m->getNumContacts(); ++c)
+                    touching = touching || m->getContactPoint(c).getDistance() <= btScalar(kWakeDistanceM);
+                if (touching) m_toWake.push_back(r);
+            }
+        }
+        for (const int r : m_toWake)
+            if (m_owner.m_ragdolls[static_cast<std::size_t>(r)]->frozen())
+                m_owner.m_ragdolls[static_cast<std::size_t>(r)]->wake();
     }
 
     // Speculative contacts for the next substep: every manifold of a ragdoll body keeps (and finds) points up
@@ -161,6 +198,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
 
     RagdollWorld& m_owner;
     std::vector<std::vector<btPersistentManifold*>> m_contacts;
+    std::vector<int> m_toWake;
 };
 
 RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)

@@ -11,6 +11,10 @@ Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
       m_world(std::make_unique<btDiscreteDynamicsWorld>(m_dispatcher.get(), m_broadphase.get(), m_solver.get(),
                                                         m_config.get())) {
     m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));
+    // Bullet recomputes every object's bounding box every step by default, sleeping and static ones too; nothing
+    // here moves a static or sleeping object without waking it, so only active objects are updated (what a resting
+    // ragdoll costs, README: Economy).
+    m_world->setForceUpdateAllAabbs(false);
     if (settings.ground) {
         m_groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
         m_ground = std::make_unique<btRigidBody>(0, nullptr, m_groundShape.get());
@@ -48,6 +52,10 @@ ContactDepth Scene::deepestContact() const {
             if (depth > out.depthM) out = {depth, man->getBody0(), man->getBody1()};
         }
     }
+    // A frozen ragdoll has no contacts in the world; it rests as deep as it was when it froze.
+    for (const auto& r : m_ragdolls)
+        if (r->frozen() && r->frozenContact().depthM > out.depthM)
+            out = {r->frozenContact().depthM, r->frozenContact().a, r->frozenContact().b};
     return out;
 }
 

@@ -126,8 +126,22 @@ class Ragdoll {
     /// The wake threshold of applyImpulse, N·s.
     double impulseThresholdNs() const { return 500.0 * figure().units.metresPerUnit; }
 
-    /// True while the figure is at rest by its own rules (§6.1); its bodies are then asleep in Bullet.
+    /// True while the figure is at rest by its own rules (§6.1). Spawned through a RagdollWorld, its bodies are then
+    /// frozen (frozen()); in a plain world they are asleep in Bullet.
     bool atRest() const;
+    /// True while the ragdoll rests frozen (only when spawned through a RagdollWorld): its constraints are out of
+    /// the world and its bodies are static objects of the StaticFilter group that test no pairs against static
+    /// objects, so it costs the world (almost) nothing per step. A contact with an active body (the RagdollWorld
+    /// checks every substep), an impulse above the threshold, setBodyStates or wake() restore it exactly.
+    bool frozen() const { return m_frozen; }
+    /// The deepest contact of the ragdoll's bodies at the moment it froze (penetration in metres, 0 for none, and
+    /// the two objects): a frozen ragdoll has no contacts in the world, but it still rests that deep.
+    struct FrozenContact {
+        double depthM = 0;
+        const btCollisionObject* a = nullptr;
+        const btCollisionObject* b = nullptr;
+    };
+    const FrozenContact& frozenContact() const { return m_frozenContact; }
     /// Seconds simulated since the ragdoll last woke (the engine's activateTime).
     double activeSeconds() const;
     /// Puts the figure to rest now: zero velocities, bodies asleep.
@@ -140,6 +154,8 @@ class Ragdoll {
     void addBodies(const SpawnOptions& options);
     void addConstraints();
     void filterPairs();
+    void freeze();
+    void thaw();
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
 
@@ -151,6 +167,11 @@ class Ragdoll {
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
+    std::vector<bool> m_disablesCollision; ///< per Bullet constraint: added with collision between its bodies off
+    int m_group = 0;                       ///< collision group of every body
+    std::vector<int> m_masks;              ///< collision mask of each body
+    bool m_frozen = false;                 ///< see frozen()
+    FrozenContact m_frozenContact;
     std::vector<btTypedConstraint*> m_main;
     std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
                                                                ///< ///< per figure constraint

@@ -1,6 +1,7 @@
 #pragma once
 // The Bullet half of a Figure that every live Ragdoll shares: collision shapes, built once.
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
@@ -34,6 +35,13 @@ class RagdollAsset {
     /// Distance from the centre of mass of body `body` to its nearest face, metres (its inscribed radius about
     /// the centre of mass): the radius of its continuous-collision sphere.
     double innerRadius(int body) const { return m_innerRadii[static_cast<std::size_t>(body)]; }
+    /// Self-collision pairs (i < j, ascending) a ragdoll tests for contact: figure::selfCollisionPairs less the
+    /// prunedPairs().
+    const std::vector<std::pair<int, int>>& contactPairs() const { return m_contactPairs; }
+    /// Self-collision pairs the figure's joints keep apart (ascending): along every joint path between the two
+    /// bodies, within the joints' limits widened by 10° each, they stay more than 2 cm apart, so a ragdoll never
+    /// tests them for contact. Computed once per figure (issue 12).
+    const std::vector<std::pair<int, int>>& prunedPairs() const { return m_prunedPairs; }
 
   private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
@@ -41,6 +49,8 @@ class RagdollAsset {
     std::vector<std::unique_ptr<btCollisionShape>> m_shapes;
     std::vector<double> m_margins;
     std::vector<double> m_innerRadii;
+    std::vector<std::pair<int, int>> m_contactPairs;
+    std::vector<std::pair<int, int>> m_prunedPairs;
 };
 
 } // namespace afb::bullet

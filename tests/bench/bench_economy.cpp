@@ -1,0 +1,306 @@
+// The same-run reference (issue 12): the bundled humanoid built through afbullet and as plain Bullet
+// (sim::RawRagdoll, method `raw`), dropped in the same program, each one's cost per awake body-step and their ratio.
+//   BM_Drop/<method>   16 humanoids dropped 1 m, 300 steps at 60 Hz, sleeping off (the chart's scene, every body
+//                      awake): CPU µs per awake body-step (counter us_per_awake_body_step)
+//   BM_Rest/<method>   160 humanoids dropped 1 m, 10 s, sleeping on: CPU µs per body-step, awake or not
+//   BM_Crowd/<method>/<resting>  10 humanoids dropped 1 m beside <resting> humanoids spawned at rest (standing on
+//                      the ground, never touched), 120 steps: CPU µs per step (counter us_per_step)
+//   BM_Spawn/<method>  spawning one built figure into a world that holds 100 of it already: µs per ragdoll
+// Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
+// solve contacts and joints with 20), default, fast. After the runs, a table of the ratios to raw is printed.
+// Time is thread CPU time (other processes do not count); instruction counts, exact from run to run, come from
+// cmake/callgrind-cost.sh.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <malloc.h>
+#include <time.h>
+
+#include "afb/bullet/RagdollAsset.h"
+#include "afb/decl/Library.h"
+#include "afb/figure/Load.h"
+#include "afb/sim/RawRagdoll.h"
+#include "afb/sim/Scene.h"
+
+namespace {
+
+using afb::bullet::Method;
+
+double threadCpuSeconds() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+/// The bundled humanoid, loaded once; null when the repository's content is not found.
+std::shared_ptr<const afb::bullet::RagdollAsset> humanoid() {
+    static const std::shared_ptr<const afb::bullet::RagdollAsset> asset = [] {
+        afb::text::Diagnostics diags;
+        std::shared_ptr<const afb::bullet::RagdollAsset> out;
+        if (auto lib = afb::decl::Library::open(AFB_SOURCE_DIR, diags))
+            if (auto loaded = afb::figure::loadEntityFigure(*lib, "humanoid", {}, diags))
+                out = afb::bullet::RagdollAsset::create(loaded->figure);
+        return out;
+    }();
+    return asset;
+}
+
+/// The methods compared, by label.
+struct Labelled {
+    const char* label;
+    Method method;
+};
+std::vector<Labelled> methods() {
+    Method rawEqual = afb::sim::rawMethod();
+    rawEqual.iterations = 20;
+    return {{"raw", afb::sim::rawMethod()},
+            {"raw:iterations=20", rawEqual},
+            {"default", *afb::bullet::methodPreset("default")},
+            {"fast", *afb::bullet::methodPreset("fast")}};
+}
+
+/// `count` humanoids on a grid, 37° apart in yaw, the lowest point `heightM` above the ground.
+struct Drop {
+    afb::sim::Scene scene;
+    Drop(const Method& method, int count, double heightM, bool sleeping, int resting = 0) : scene(method) {
+        const auto asset = humanoid();
+        const double spacing = 2.5;
+        const int columns = 13;
+        double lowest = 1e9; // the load pose's lowest point, model space
+        for (const afb::figure::FigureBody& b : asset->figure().bodies)
+            for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, b.loadPose.apply(v).z());
+        for (int i = 0; i < count; ++i) {
+            afb::bullet::SpawnOptions o;
+            o.comeToRest = sleeping;
+            o.entityTransform = btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.6458 * i)),
+                                            btVector3(btScalar(spacing * (i % columns)),
+                                                      btScalar(spacing * (i / columns)), btScalar(heightM - lowest)));
+            if (afb::sim::isRaw(method)) scene.spawnRaw(asset, o);
+            else scene.spawn(asset, o);
+        }
+        // The resting crowd: beyond the dropped ones (y from 20 m), standing on the ground, asleep from the start.
+        for (int i = 0; i < resting; ++i) {
+            afb::bullet::SpawnOptions o;
+            o.startAtRest = true;
+            o.entityTransform.setOrigin(
+                btVector3(btScalar(spacing * (i % 40)), btScalar(20 + spacing * (i / 40)), btScalar(-lowest + 0.001)));
+            if (afb::sim::isRaw(method)) scene.spawnRaw(asset, o);
+            else scene.spawn(asset, o);
+        }
+    }
+    int awakeBodies() const {
+        int n = 0;
+        for (const auto& r : scene.ragdolls()) n += r->awakeBodyCount();
+        for (const auto& r : scene.rawRagdolls()) n += r->awakeBodyCount();
+        return n;
+    }
+    int bodies() const {
+        int n = 0;
+        for (const auto& r : scene.ragdolls()) n += r->bodyCount();
+        for (const auto& r : scene.rawRagdolls()) n += r->bodyCount();
+        return n;
+    }
+};
+
+/// Results per benchmark family and label, for the ratio table.
+std::map<std::string, std::map<std::string, double>>& results() {
+    static std::map<std::string, std::map<std::string, double>> r;
+    return r;
+}
+
+/// Steps `drop` `steps` times at 60 Hz; returns CPU µs per awake body-step (awake: counted after each step) and
+/// per body-step.
+std::pair<double, double> run(Drop& drop, int steps) {
+    long long awake = 0;
+    double cpu = 0;
+    for (int s = 0; s < steps; ++s) {
+        const double c0 = threadCpuSeconds();
+        drop.scene.step(1.0 / 60.0);
+        cpu += threadCpuSeconds() - c0;
+        awake += drop.awakeBodies();
+    }
+    const double bodySteps = static_cast<double>(drop.bodies()) * steps;
+    return {awake > 0 ? cpu * 1e6 / static_cast<double>(awake) : 0.0, cpu * 1e6 / bodySteps};
+}
+
+void dropBenchmark(benchmark::State& state, const Method& method, const char* label) {
+    if (!humanoid()) {
+        state.SkipWithError("bundled humanoid not found");
+        return;
+    }
+    double perAwake = 0;
+    int runs = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        Drop drop(method, 16, 1.0, false);
+        state.ResumeTiming();
+        perAwake += run(drop, 300).first;
+        ++runs;
+    }
+    state.counters["us_per_awake_body_step"] = perAwake / runs;
+    results()["drop"][label] = perAwake / runs;
+}
+
+void restBenchmark(benchmark::State& state, const Method& method, const char* label) {
+    if (!humanoid()) {
+        state.SkipWithError("bundled humanoid not found");
+        return;
+    }
+    double perBody = 0, perAwake = 0;
+    int runs = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        Drop drop(method, 160, 1.0, true);
+        state.ResumeTiming();
+        const auto [awake, body] = run(drop, 600);
+        perBody += body;
+        perAwake += awake;
+        ++runs;
+    }
+    state.counters["us_per_body_step"] = perBody / runs;
+    state.counters["us_per_awake_body_step"] = perAwake / runs;
+    results()["rest"][label] = perBody / runs;
+}
+
+void crowdBenchmark(benchmark::State& state, const Method& method, const char* label) {
+    if (!humanoid()) {
+        state.SkipWithError("bundled humanoid not found");
+        return;
+    }
+    const int resting = static_cast<int>(state.range(0));
+    double perStep = 0;
+    int runs = 0;
+    bool woke = false;
+    for (auto _ : state) {
+        state.PauseTiming();
+        Drop drop(method, 10, 1.0, true, resting);
+        state.ResumeTiming();
+        const int steps = 120;
+        double cpu = 0;
+        for (int s = 0; s < steps; ++s) {
+            const double c0 = threadCpuSeconds();
+            drop.scene.step(1.0 / 60.0);
+            cpu += threadCpuSeconds() - c0;
+        }
+        perStep += cpu * 1e6 / steps;
+        ++runs;
+        const std::size_t n = drop.scene.ragdolls().size() + drop.scene.rawRagdolls().size();
+        for (std::size_t k = 10; k < n; ++k) {
+            const int awake = afb::sim::isRaw(method) ? drop.scene.rawRagdolls()[k]->awakeBodyCount()
+                                                      : drop.scene.ragdolls()[k]->awakeBodyCount();
+            woke = woke || awake > 0;
+        }
+    }
+    if (woke) state.SkipWithError("a resting humanoid woke");
+    state.counters["us_per_step"] = perStep / runs;
+    results()["crowd" + std::to_string(resting)][label] = perStep / runs;
+}
+
+void spawnBenchmark(benchmark::State& state, const Method& method, const char* label) {
+    if (!humanoid()) {
+        state.SkipWithError("bundled humanoid not found");
+        return;
+    }
+    Drop drop(method, 100, 1.0, true);
+    const auto asset = humanoid();
+    double cpu = 0;
+    long long spawned = 0;
+    for (auto _ : state) {
+        afb::bullet::SpawnOptions o;
+        o.entityTransform.setOrigin(btVector3(-5, -5, 1));
+        const double c0 = threadCpuSeconds();
+        if (afb::sim::isRaw(method)) {
+            afb::sim::RawRagdoll r(asset, drop.scene.world(), o);
+            benchmark::DoNotOptimize(r.bodyCount());
+        } else {
+            afb::bullet::Ragdoll r(asset, drop.scene.ragdollWorld(), o);
+            benchmark::DoNotOptimize(r.bodyCount());
+        }
+        cpu += threadCpuSeconds() - c0;
+        ++spawned;
+    }
+    state.counters["us_per_ragdoll"] = cpu * 1e6 / static_cast<double>(spawned); // spawn and removal
+    results()["spawn"][label] = cpu * 1e6 / static_cast<double>(spawned);
+    // Heap held per live instance (the asset's shapes are shared and not counted): 100 more spawned and kept.
+    {
+        Drop more(method, 0, 1.0, true, 0);
+        const std::size_t heap1 = ::mallinfo2().uordblks;
+        for (int i = 0; i < 100; ++i) {
+            afb::bullet::SpawnOptions o;
+            o.entityTransform.setOrigin(btVector3(btScalar(3 * i), -10, 1));
+            if (afb::sim::isRaw(method)) more.scene.spawnRaw(asset, o);
+            else more.scene.spawn(asset, o);
+        }
+        more.scene.step(1.0 / 60.0); // contact manifolds and solver bodies exist
+        const double perInstance = static_cast<double>(::mallinfo2().uordblks - heap1) / 100.0;
+        state.counters["bytes_per_ragdoll"] = perInstance;
+        results()["memory"][label] = perInstance;
+    }
+}
+
+void registerAll() {
+    for (const Labelled& m : methods()) {
+        const std::string label = m.label;
+        benchmark::RegisterBenchmark(("BM_Drop/" + label).c_str(), dropBenchmark, m.method, m.label)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1);
+    }
+    for (const Labelled& m : methods())
+        benchmark::RegisterBenchmark((std::string("BM_Rest/") + m.label).c_str(), restBenchmark, m.method, m.label)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1);
+    for (const Labelled& m : methods())
+        benchmark::RegisterBenchmark((std::string("BM_Crowd/") + m.label).c_str(), crowdBenchmark, m.method, m.label)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1)
+            ->Arg(0)
+            ->Arg(1000);
+    for (const Labelled& m : methods())
+        benchmark::RegisterBenchmark((std::string("BM_Spawn/") + m.label).c_str(), spawnBenchmark, m.method, m.label)
+            ->Unit(benchmark::kMicrosecond);
+}
+
+void printRatios() {
+    const auto& r = results();
+    if (r.count("crowd0") && r.count("crowd1000")) {
+        std::printf("\ncrowd: CPU µs per step, 10 dropped humanoids alone and beside 1000 resting ones\n");
+        for (const auto& [label, alone] : r.at("crowd0"))
+            if (r.at("crowd1000").count(label) && alone > 0)
+                std::printf("  %-20s %9.1f  %9.1f  %5.2fx\n", label.c_str(), alone, r.at("crowd1000").at(label),
+                            r.at("crowd1000").at(label) / alone);
+    }
+    for (const auto& [family, byLabel] : results()) {
+        if (family.rfind("crowd", 0) == 0) continue;
+        const auto raw = byLabel.find("raw");
+        if (raw == byLabel.end() || raw->second <= 0) continue;
+        std::printf("\n%s: %s, and the ratio to raw (plain Bullet's defaults)\n", family.c_str(),
+                    family == "spawn"    ? "CPU µs per ragdoll (spawn + removal)"
+                    : family == "memory" ? "heap bytes per live instance, after one step"
+                    : family == "rest"   ? "CPU µs per body-step (160 humanoids, 10 s, sleeping on)"
+                                         : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
+        for (const auto& [label, value] : byLabel)
+            std::printf("  %-20s %8.3f  %5.2fx raw\n", label.c_str(), value, value / raw->second);
+        const auto equal = byLabel.find("raw:iterations=20");
+        const auto preset = byLabel.find("default");
+        if (equal != byLabel.end() && preset != byLabel.end() && equal->second > 0)
+            std::printf("  default / raw:iterations=20 (equal iterations): %.2fx\n", preset->second / equal->second);
+    }
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    registerAll();
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    printRatios();
+    return 0;
+}
