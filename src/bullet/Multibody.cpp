@@ -257,10 +257,24 @@ void MultibodyRagdoll::build(const SpawnOptions& options) {
     m_treeEdge.assign(f.constraints.size(), false);
     std::vector<bool> reached(static_cast<std::size_t>(n), false);
     auto rotation = [&](int b) { return toBt(f.bodies[static_cast<std::size_t>(b)].loadPose.rotation); };
-    for (int root = 0; root < n; ++root) {
+    // A body fixed to the world is its tree's base, and that base is fixed: the attachment is then exact.
+    std::vector<int> fixedToWorld(static_cast<std::size_t>(n), -1); // the constraint, per body
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        if (c.type == JointType::Fixed && c.body2 < 0 && fixedToWorld[static_cast<std::size_t>(c.body1)] < 0)
+            fixedToWorld[static_cast<std::size_t>(c.body1)] = static_cast<int>(ci);
+    }
+    std::vector<int> roots;
+    for (int b = 0; b < n; ++b)
+        if (fixedToWorld[static_cast<std::size_t>(b)] >= 0) roots.push_back(b);
+    for (int b = 0; b < n; ++b)
+        if (fixedToWorld[static_cast<std::size_t>(b)] < 0) roots.push_back(b);
+    for (const int root : roots) {
         if (reached[static_cast<std::size_t>(root)]) continue;
         Part part;
         part.root = root;
+        part.fixedBase = fixedToWorld[static_cast<std::size_t>(root)] >= 0;
+        if (part.fixedBase) m_treeEdge[static_cast<std::size_t>(fixedToWorld[static_cast<std::size_t>(root)])] = true;
         reached[static_cast<std::size_t>(root)] = true;
         const int partIndex = static_cast<int>(m_parts.size());
         m_bodies[static_cast<std::size_t>(root)] = {partIndex, -1};
@@ -306,7 +320,7 @@ void MultibodyRagdoll::build(const SpawnOptions& options) {
         }
         const figure::FigureBody& base = f.bodies[static_cast<std::size_t>(root)];
         part.body = std::make_unique<btMultiBody>(links, static_cast<btScalar>(base.massKg), toBt(base.inertiaKgM2),
-                                                  false, false);
+                                                  part.fixedBase, false);
         btMultiBody& mb = *part.body;
         const btTransform baseWorld = m_spawn * toBt(base.loadPose);
         mb.setBasePos(baseWorld.getOrigin());
@@ -530,11 +544,13 @@ void MultibodyRagdoll::setBodyStates(std::span<const figure::BodyState> states) 
     auto velocity = [&](int b) { return toBt(states[static_cast<std::size_t>(b)].linearVelocity); };
     for (Part& p : m_parts) {
         btMultiBody& mb = *p.body;
-        const btTransform base = pose(p.root);
-        mb.setBasePos(base.getOrigin());
-        mb.setWorldToBaseRot(quatOf(base.getBasis()).inverse());
-        mb.setBaseVel(velocity(p.root));
-        mb.setBaseOmega(omega(p.root));
+        if (!p.fixedBase) { // a fixed base stays where the world holds it
+            const btTransform base = pose(p.root);
+            mb.setBasePos(base.getOrigin());
+            mb.setWorldToBaseRot(quatOf(base.getBasis()).inverse());
+            mb.setBaseVel(velocity(p.root));
+            mb.setBaseOmega(omega(p.root));
+        }
         for (const Joint& j : p.joints) {
             const btTransform tp = pose(j.parent), tc = pose(j.child);
             const btVector3 wRel = omega(j.child) - omega(j.parent);

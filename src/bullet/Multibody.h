@@ -30,9 +30,9 @@ inline constexpr const char* kNeedsMultiBodyWorld =
     "afbullet: the multibody backend needs a btMultiBodyDynamicsWorld (with a btMultiBodyConstraintSolver); this "
     "world is a plain btDynamicsWorld: create a btMultiBodyDynamicsWorld, or use the rigid backend";
 
-/// A figure as btMultiBody trees: one per connected part of its constraint graph (the origin body's part first),
-/// the part's first body as the floating base and one link per tree edge (a universal joint: two revolute links
-/// with a massless link between). Loops, world attachments and springs are btMultiBodyConstraints.
+/// A figure as btMultiBody trees: one per connected part of its constraint graph, a body fixed to the world as a
+/// fixed base, else the part's first body as the floating base and one link per tree edge (a universal joint: two
+/// revolute links with a massless link between). Loops, world attachments and springs are btMultiBodyConstraints.
 class MultibodyRagdoll {
   public:
     /// Throws std::invalid_argument (kNeedsMultiBodyWorld) unless `world` is a btMultiBodyDynamicsWorld.
@@ -95,6 +95,7 @@ class MultibodyRagdoll {
     struct Part {
         std::unique_ptr<btMultiBody> body;
         int root = 0;              ///< figure body of the base
+        bool fixedBase = false;    ///< fixed to the world (the figure fixes that body there)
         std::vector<Joint> joints; ///< in link order (parents first)
     };
 
