@@ -11,6 +11,7 @@ methods=(
   raw raw:substeps=2 raw:substeps=4 raw:iterations=20 # plain Bullet, and its own two levers
   legacy fast default accurate exact                  # the presets (README "Methods")
   default:substeps=2 fast:position-iterations=0       # a preset with more steps, one without its position pass
+  multibody multibody:substeps=2                      # the reduced-coordinate backend (README)
 )
 out=build/chart
 build/release/bin/afb chart --base . humanoid --methods "$(IFS=,; echo "${methods[*]}")" --heights 1,10 --hz 60 \

@@ -9,10 +9,11 @@
 namespace afb::bullet {
 namespace {
 
-constexpr std::array<std::string_view, 5> kPresetNames = {"fast", "default", "accurate", "exact", "legacy"};
+constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
+                                                          "exact", "legacy",  "multibody"};
 
 const std::array<MethodKnob, 18> kKnobs = {{
-    {"backend", "Simulation backend: rigid (btRigidBody + constraints)", &Method::backend},
+    {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
     {"joint-iterations", "Solver iterations of the figure's joints and limits (0: the world's)",
@@ -64,6 +65,7 @@ std::string formatReal(double v) {
 std::string_view toString(Backend b) {
     switch (b) {
     case Backend::Rigid: return "rigid";
+    case Backend::Multibody: return "multibody";
     }
     return "rigid";
 }
@@ -109,6 +111,18 @@ std::optional<Method> methodPreset(std::string_view name) {
         // against the whole ragdoll's mass. The former exact, four substeps of ten iterations, reached 11 mm / 9°
         // at 1 m and 60 mm / 54° at 10 m for 0.94× this cost (README: Methods).
         m.directJoints = true;
+        return m;
+    }
+    if (name == "multibody") {
+        // Reduced coordinates: no joint rows to iterate, warm-start or project; contacts as the rigid default's
+        // (20 iterations, vertex contacts), limits our own speculative rows. Speculative contacts and continuous
+        // collision are the rigid backend's (Bullet's multibody world has neither).
+        m.backend = Backend::Multibody;
+        m.jointIterations = 0;
+        m.positionIterations = 0;
+        m.speculativeContacts = false;
+        m.jointWarmStarting = false;
+        m.ccd = CcdPolicy::Off;
         return m;
     }
     return std::nullopt;
@@ -173,8 +187,9 @@ std::string setKnob(Method& m, const MethodKnob& knob, std::string_view value) {
             return {};
         }
         std::string operator()(Backend Method::*f) const {
-            if (value != "rigid") return what + "expected rigid";
-            m.*f = Backend::Rigid;
+            if (value == "rigid") m.*f = Backend::Rigid;
+            else if (value == "multibody") m.*f = Backend::Multibody;
+            else return what + "expected rigid or multibody";
             return {};
         }
     };

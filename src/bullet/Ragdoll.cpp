@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "EngineFriction.h"
+#include "Multibody.h"
 #include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollWorld.h"
@@ -66,6 +67,12 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& wor
     : m_asset(std::move(asset)), m_world(world), m_method(options.method),
       m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
       m_action(std::make_unique<Action>(*this, options.comeToRest)) {
+    if (m_method.backend == Backend::Multibody) {
+        m_multibody = std::make_unique<detail::MultibodyRagdoll>(m_asset, world, options);
+        for (std::size_t i = 0; i < figure().constraints.size(); ++i)
+            m_frames.push_back(m_multibody->constraintFramesLocal(static_cast<int>(i)));
+        return;
+    }
     addBodies(options);
     addConstraints();
     filterPairs();
@@ -82,19 +89,47 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
 
-std::vector<figure::BodyState> Ragdoll::bodyStates() const { return bodyStatesOf(m_bodies); }
+int Ragdoll::bodyCount() const { return m_multibody ? m_multibody->bodyCount() : static_cast<int>(m_bodies.size()); }
 
-int Ragdoll::awakeBodyCount() const { return awakeCountOf(m_bodies); }
+btCollisionObject& Ragdoll::collisionObject(int i) {
+    if (m_multibody) return m_multibody->collider(i);
+    return *m_bodies[static_cast<std::size_t>(i)];
+}
+
+const btCollisionObject& Ragdoll::collisionObject(int i) const {
+    if (m_multibody) return m_multibody->collider(i);
+    return *m_bodies[static_cast<std::size_t>(i)];
+}
+
+std::vector<figure::BodyState> Ragdoll::bodyStates() const {
+    if (!m_multibody) return bodyStatesOf(m_bodies);
+    std::vector<figure::BodyState> out;
+    for (const BodySample& s : m_multibody->samples())
+        out.push_back({toEigen(s.transform), toEigen(s.linearVelocity), toEigen(s.angularVelocity)});
+    return out;
+}
+
+int Ragdoll::awakeBodyCount() const { return m_multibody ? m_multibody->awakeBodyCount() : awakeCountOf(m_bodies); }
 
 JointError Ragdoll::jointError(int i) const {
+    if (m_multibody) return m_multibody->jointError(i);
     return jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
                         m_frames[static_cast<std::size_t>(i)], m_spawn);
 }
 
-std::vector<figure::Transform> Ragdoll::bodyTransforms() const { return bodyTransformsOf(m_bodies); }
+std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
+    if (!m_multibody) return bodyTransformsOf(m_bodies);
+    std::vector<figure::Transform> out;
+    for (const btTransform& t : m_multibody->transforms()) out.push_back(toEigen(t));
+    return out;
+}
 
 bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
-    if (states.size() != m_bodies.size()) return false;
+    if (states.size() != static_cast<std::size_t>(bodyCount())) return false;
+    if (m_multibody) {
+        m_multibody->setBodyStates(states);
+        return true;
+    }
     for (std::size_t i = 0; i < m_bodies.size(); ++i) {
         btRigidBody& b = *m_bodies[i];
         const btTransform t = toBt(states[i].pose);
@@ -116,16 +151,22 @@ bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3&
     if (joint < 0 || static_cast<std::size_t>(joint) >= owners.size()) return false;
     const int body = owners[static_cast<std::size_t>(joint)];
     if (body < 0 || impulse.length() < impulseThresholdNs()) return false;
+    if (m_multibody) {
+        m_multibody->wake();
+        m_multibody->applyImpulse(body, impulse, worldPoint);
+        return true;
+    }
     btRigidBody& b = *m_bodies[static_cast<std::size_t>(body)];
     wake();
     b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
     return true;
 }
 
-bool Ragdoll::atRest() const { return m_action->atRest; }
-double Ragdoll::activeSeconds() const { return m_action->activeTime; }
+bool Ragdoll::atRest() const { return m_multibody ? m_multibody->atRest() : m_action->atRest; }
+double Ragdoll::activeSeconds() const { return m_multibody ? m_multibody->activeSeconds() : m_action->activeTime; }
 
 void Ragdoll::putToRest() {
+    if (m_multibody) return m_multibody->putToRest();
     for (const auto& b : m_bodies) {
         b->setLinearVelocity(btVector3(0, 0, 0));
         b->setAngularVelocity(btVector3(0, 0, 0));
@@ -181,10 +222,14 @@ void Ragdoll::thaw() {
         m_world.addConstraint(m_constraints[k].get(), m_disablesCollision[k]);
 }
 
-void Ragdoll::wake() { m_action->wake(); }
+void Ragdoll::wake() {
+    if (m_multibody) return m_multibody->wake();
+    m_action->wake();
+}
 
 Ragdoll::~Ragdoll() {
     if (m_manager) m_manager->detach(*this);
+    if (m_multibody) return; // its destructor removes its trees, colliders and constraints
     m_world.removeAction(m_action.get());
     for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
     for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
@@ -234,6 +279,7 @@ btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
 }
 
 std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
+    if (m_multibody) return m_multibody->constraintFramesWorld(i);
     return constraintFramesWorldOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
                                    m_frames[static_cast<std::size_t>(i)]);
 }

@@ -5,6 +5,9 @@
 #include <atomic>
 #include <mutex>
 
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+
 #include "EngineFriction.h"
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
@@ -68,6 +71,22 @@ EngineContactFriction::~EngineContactFriction() {
 
 bool EngineContactFriction::installed() {
     return gFrictionInstalled && gContactAddedCallback == &engineContactFriction;
+}
+
+WorldParts makeWorld(const Method& method, btDispatcher& dispatcher, btBroadphaseInterface& broadphase,
+                     btCollisionConfiguration& configuration) {
+    WorldParts parts;
+    if (method.backend == Backend::Multibody) {
+        auto solver = std::make_unique<btMultiBodyConstraintSolver>();
+        parts.world =
+            std::make_unique<btMultiBodyDynamicsWorld>(&dispatcher, &broadphase, solver.get(), &configuration);
+        parts.solver = std::move(solver);
+    } else {
+        parts.solver = std::make_unique<RagdollSolver>();
+        parts.world =
+            std::make_unique<btDiscreteDynamicsWorld>(&dispatcher, &broadphase, parts.solver.get(), &configuration);
+    }
+    return parts;
 }
 
 void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
@@ -177,7 +196,8 @@ class RagdollWorld::PositionAction : public btActionInterface {
         }
         for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
             Ragdoll& r = *m_owner.m_ragdolls[k];
-            if (r.atRest()) continue;
+            // A multibody ragdoll's tree joints hold by construction; the pass moves rigid bodies only.
+            if (r.atRest() || r.backend() == Backend::Multibody) continue;
             detail::positionPass(r, iterations, m_contacts[k]);
         }
     }
@@ -217,7 +237,8 @@ void RagdollWorld::step(double dtSeconds) {
 void RagdollWorld::attach(Ragdoll& r) {
     if (m_method.speculativeContacts)
         for (int i = 0; i < r.bodyCount(); ++i)
-            if (r.body(i).getUserIndex2() == kEngineFrictionMarker) r.body(i).setUserIndex2(kSpeculativeFrictionMarker);
+            if (r.collisionObject(i).getUserIndex2() == kEngineFrictionMarker)
+                r.collisionObject(i).setUserIndex2(kSpeculativeFrictionMarker);
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
         solver != nullptr && (r.method().jointWarmStarting || r.method().directJoints))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
@@ -245,7 +266,7 @@ void RagdollWorld::rebuildOwners() {
     m_owners.clear();
     for (std::size_t k = 0; k < m_ragdolls.size(); ++k)
         for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i) {
-            const btCollisionObject& body = m_ragdolls[k]->body(i);
+            const btCollisionObject& body = m_ragdolls[k]->collisionObject(i);
             btVector3 centre;
             btScalar radius = 0;
             body.getCollisionShape()->getBoundingSphere(centre, radius);

@@ -66,7 +66,7 @@ template <class Doll>
 std::optional<std::string> bodyName(const std::vector<std::unique_ptr<Doll>>& dolls, const btCollisionObject* o) {
     for (const auto& d : dolls)
         for (int i = 0; i < d->bodyCount(); ++i)
-            if (&d->body(i) == o) return d->figure().bodies[static_cast<std::size_t>(i)].name;
+            if (&d->collisionObject(i) == o) return d->figure().bodies[static_cast<std::size_t>(i)].name;
     return std::nullopt;
 }
 

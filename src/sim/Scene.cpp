@@ -7,9 +7,10 @@ namespace afb::sim {
 Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
     : m_method(method), m_config(std::make_unique<btDefaultCollisionConfiguration>()),
       m_dispatcher(std::make_unique<btCollisionDispatcher>(m_config.get())),
-      m_broadphase(std::make_unique<btDbvtBroadphase>()), m_solver(std::make_unique<bullet::RagdollSolver>()),
-      m_world(std::make_unique<btDiscreteDynamicsWorld>(m_dispatcher.get(), m_broadphase.get(), m_solver.get(),
-                                                        m_config.get())) {
+      m_broadphase(std::make_unique<btDbvtBroadphase>()) {
+    bullet::WorldParts parts = bullet::makeWorld(method, *m_dispatcher, *m_broadphase, *m_config);
+    m_solver = std::move(parts.solver);
+    m_world = std::move(parts.world);
     m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));
     // Bullet recomputes every object's bounding box every step by default, sleeping and static ones too; nothing
     // here moves a static or sleeping object without waking it, so only active objects are updated (what a resting

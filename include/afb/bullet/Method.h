@@ -14,6 +14,11 @@ namespace afb::bullet {
 /// Which representation simulates the figure.
 enum class Backend {
     Rigid, ///< one btRigidBody per body, joined by btTypedConstraints (maximal coordinates)
+    /// one btMultiBody per connected part of the figure (reduced coordinates, Featherstone): its joints cannot
+    /// separate. Needs a btMultiBodyDynamicsWorld. Knobs that apply: substeps, iterations, solver-tolerance,
+    /// joint-erp (contacts and loop joints), limit-erp, speculative-limits, warm-starting (contacts) and
+    /// multipoint-contacts; the rest are the rigid backend's and are ignored.
+    Multibody,
 };
 
 /// Which bodies Bullet sweeps continuously between steps.
@@ -98,8 +103,9 @@ struct Method {
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets, fast to exact: "fast", "default", "accurate", "exact", and "legacy" (afbullet 0.1's
-/// method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for comparison).
+/// The named presets, fast to exact: "fast", "default", "accurate", "exact", "legacy" (afbullet 0.1's
+/// method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for comparison) and
+/// "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);

@@ -4,6 +4,7 @@
 // the tools library's plain-Bullet reference (sim::RawRagdoll), so both are judged by one definition. Public but
 // internal in spirit (not part of afb/afb.h).
 #include <memory>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -23,6 +24,14 @@ struct JointError {
 /// A ragdoll's bodies in figure body order, as bullet::Ragdoll and sim::RawRagdoll hold them.
 using BodyList = std::vector<std::unique_ptr<btRigidBody>>;
 
+/// One body's state as any backend can give it (a btMultiBody link has no btRigidBody): the body frame (centre
+/// of mass, principal axes) and its velocities, world.
+struct BodySample {
+    btTransform transform;
+    btVector3 linearVelocity;  ///< of the centre of mass, m/s
+    btVector3 angularVelocity; ///< rad/s
+};
+
 /// The constraint frame of constraint `c` as attached to body1 and to body2 (or the world), world space now, from
 /// `frames`: the frame in body1's frame and in body2's frame (world for a world constraint).
 std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c, const BodyList& bodies,
@@ -32,6 +41,13 @@ std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::Figure
 /// rotation stands for body2's in a world constraint): the distance of the two frames' origins, and
 /// figure::limitExcessRad in double.
 JointError jointErrorOf(const figure::FigureConstraint& c, const BodyList& bodies,
+                        const std::pair<btTransform, btTransform>& frames, const btTransform& spawn);
+
+/// The same two, from the bodies' world transforms (body frames) in figure body order.
+std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c,
+                                                            std::span<const btTransform> bodies,
+                                                            const std::pair<btTransform, btTransform>& frames);
+JointError jointErrorOf(const figure::FigureConstraint& c, std::span<const btTransform> bodies,
                         const std::pair<btTransform, btTransform>& frames, const btTransform& spawn);
 
 /// World transforms of the bodies (body frames: centre of mass, principal axes), metres.
@@ -51,11 +67,14 @@ class RestTest {
     /// After a step of `dtSeconds`, `activeSeconds` after the figure last woke: true when the rules say the
     /// bodies (in figure body order) are at rest now.
     bool update(const BodyList& bodies, double dtSeconds, double activeSeconds);
+    /// The same from body samples (any backend), in figure body order.
+    bool update(std::span<const BodySample> bodies, double dtSeconds, double activeSeconds);
     /// Forgets the window and the previous velocities (the figure woke).
     void reset();
 
   private:
-    void startWindow(const BodyList& bodies, double activeSeconds);
+    template <class Get>
+    bool updateWith(std::size_t count, const Get& get, double dtSeconds, double activeSeconds);
 
     figure::RestRules m_rules;
     double m_windowStart = -1;

@@ -15,6 +15,9 @@
 namespace afb::bullet {
 
 class RagdollWorld;
+namespace detail {
+class MultibodyRagdoll;
+}
 
 /// Restitution of every AF body (af-format §3.4: the engine's fixed value; it applies it above 2 units/s only).
 inline constexpr double kBodyRestitution = 0.4;
@@ -54,6 +57,12 @@ inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Me
 
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
+///
+/// The backend is the method's (SpawnOptions::method.backend), chosen here once: Backend::Rigid builds one
+/// btRigidBody per body and btTypedConstraints; Backend::Multibody builds btMultiBody trees (reduced coordinates:
+/// tree joints cannot separate) and needs a btMultiBodyDynamicsWorld (with a btMultiBodyConstraintSolver): spawned
+/// into any other world it throws std::invalid_argument. Everything below but body(), constraint() and
+/// bulletConstraint() (the rigid backend's Bullet objects) answers the same way for both.
 class Ragdoll {
   public:
     /// Spawns into a plain world: the method's per-ragdoll knobs apply, the world keeps its own settings and
@@ -81,15 +90,23 @@ class Ragdoll {
     /// The entity transform it was spawned with (model space to world).
     const btTransform& spawnTransform() const { return m_spawn; }
 
-    /// Number of rigid bodies (one per figure body, same order).
-    int bodyCount() const { return static_cast<int>(m_bodies.size()); }
-    /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes).
+    /// The backend it was built with (the method's).
+    Backend backend() const { return m_method.backend; }
+    /// Number of bodies (one per figure body, same order), for either backend.
+    int bodyCount() const;
+    /// The collision object of figure body `i` (a btRigidBody, or a btMultiBodyLinkCollider); its world
+    /// transform is the body frame (centre of mass, principal axes).
+    btCollisionObject& collisionObject(int i);
+    const btCollisionObject& collisionObject(int i) const;
+    /// Rigid body of figure body `i` (rigid backend only); its transform is the body frame (centre of mass,
+    /// principal axes).
     btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(i)]; }
     const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
     /// The main Bullet constraint of figure constraint `i`.
     btTypedConstraint* constraint(int i) { return m_main[static_cast<std::size_t>(i)]; }
     const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
-    /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths).
+    /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); rigid
+    /// backend only (0 for a multibody ragdoll).
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
     /// Bullet constraint `k` of those, in the order they were added to the world.
     btTypedConstraint& bulletConstraint(int k) { return *m_constraints[static_cast<std::size_t>(k)]; }
@@ -177,6 +194,7 @@ class Ragdoll {
                                                                ///< ///< per figure constraint
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
+    std::unique_ptr<detail::MultibodyRagdoll> m_multibody; ///< the multibody backend, or null for the rigid one
 };
 
 } // namespace afb::bullet

@@ -76,6 +76,18 @@ class RagdollWorld {
     std::unique_ptr<PositionAction> m_action;
 };
 
+/// A dynamics world and its solver, as makeWorld makes them (destroy the world first).
+struct WorldParts {
+    std::unique_ptr<btConstraintSolver> solver;
+    std::unique_ptr<btDiscreteDynamicsWorld> world;
+};
+
+/// The world a method's backend needs, on the caller's collision parts: for Backend::Multibody a
+/// btMultiBodyDynamicsWorld with Bullet's btMultiBodyConstraintSolver (rigid-body ragdolls and the game's rigid
+/// bodies work in it too, with Bullet's solver), otherwise a btDiscreteDynamicsWorld with a RagdollSolver.
+WorldParts makeWorld(const Method& method, btDispatcher& dispatcher, btBroadphaseInterface& broadphase,
+                     btCollisionConfiguration& configuration);
+
 /// Sets a world's solver to a method's world-level knobs (what RagdollWorld does at construction).
 void applyWorldKnobs(btDynamicsWorld& world, const Method& method);
 

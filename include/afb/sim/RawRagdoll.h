@@ -78,6 +78,8 @@ class RawRagdoll {
     /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes).
     btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(i)]; }
     const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
+    /// The collision object of body `i` (as bullet::Ragdoll::collisionObject).
+    const btCollisionObject& collisionObject(int i) const { return body(i); }
     /// The Bullet constraint of figure constraint `i`, or nullptr for a spring.
     const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
 

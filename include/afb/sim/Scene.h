@@ -29,7 +29,9 @@ struct ContactDepth {
     const btCollisionObject* b = nullptr;
 };
 
-/// A world with the method's settings, a ground and ragdolls. Not copyable; one thread.
+/// A world with the method's settings, a ground and ragdolls. Not copyable; one thread. The world is a
+/// btMultiBodyDynamicsWorld with Bullet's btMultiBodyConstraintSolver for a multibody method, a
+/// btDiscreteDynamicsWorld with a bullet::RagdollSolver otherwise (bullet::makeWorld decides).
 class Scene {
   public:
     explicit Scene(const bullet::Method& method, const SceneSettings& settings = {});
@@ -65,7 +67,7 @@ class Scene {
     std::unique_ptr<btDefaultCollisionConfiguration> m_config;
     std::unique_ptr<btCollisionDispatcher> m_dispatcher;
     std::unique_ptr<btBroadphaseInterface> m_broadphase;
-    std::unique_ptr<bullet::RagdollSolver> m_solver;
+    std::unique_ptr<btConstraintSolver> m_solver;
     std::unique_ptr<btDiscreteDynamicsWorld> m_world;
     std::unique_ptr<btCollisionShape> m_groundShape;
     std::unique_ptr<btRigidBody> m_ground;

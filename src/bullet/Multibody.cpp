@@ -1,0 +1,642 @@
+// The reduced-coordinate backend (Multibody.h): af-format §4 joints as btMultiBody links, §4.3/§4.5 limits as
+// our own btMultiBodyConstraint rows, §6.1 rest, §6.2 collision filtering.
+#include "Multibody.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <variant>
+
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraint.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyFixedConstraint.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <BulletDynamics/Featherstone/btMultiBodyPoint2Point.h>
+
+#include "EngineFriction.h"
+#include "afb/bullet/Constraints.h"
+#include "afb/bullet/Convert.h"
+#include "afb/bullet/Ragdoll.h"
+#include "afb/figure/Collision.h"
+
+namespace afb::bullet::detail {
+
+using figure::FigureConstraint;
+using figure::JointType;
+
+namespace {
+
+// Generalised velocities a link may reach (Bullet clamps every coordinate velocity to this after each step; its
+// default of 100 would clip a foot's spin at impact and hide an instability instead of showing it).
+constexpr btScalar kMaxCoordinateVelocity = 1000;
+
+btQuaternion quatOf(const btMatrix3x3& m) {
+    btQuaternion q;
+    m.getRotation(q);
+    return q;
+}
+
+// A limit of a figure constraint on two links of one multibody (or one link against the world): the same rows as
+// the rigid backend's DirectionLimitConstraint and HingeRangeConstraint (directionLimitRows, hingeRangeRow: one
+// definition of a limit's excess and of its rate), each row's Jacobian taken over the whole tree, so the row's
+// effective mass is the articulated one (Bullet's own limits fill two Jacobians of one tree and lose the cross
+// terms).
+class MultibodyLimit : public btMultiBodyConstraint {
+  public:
+    struct Side {
+        int link = -1;                              ///< link of the body (−1: base)
+        const btCollisionObject* body = nullptr;    ///< its collider (world transform); nullptr: the world
+        const btVector3* angularVelocity = nullptr; ///< its angular velocity at the end of the last substep
+    };
+    struct Direction {
+        LimitShape shape;
+        btVector3 shaftInA;
+        btMatrix3x3 basisInB; ///< world for a world constraint
+        btScalar half1, half2;
+    };
+    struct Hinge {
+        btMatrix3x3 frameInA, frameInB; ///< frame B world for a world constraint
+        btScalar lower, upper;
+    };
+
+    MultibodyLimit(btMultiBody* tree, Side a, Side b, std::variant<Direction, Hinge> limit, LimitRowPolicy policy)
+        : btMultiBodyConstraint(tree, nullptr, a.link, b.body ? b.link : a.link, 2, true, MULTIBODY_CONSTRAINT_LIMIT),
+          m_a(a), m_b(b), m_limit(limit), m_policy(policy) {}
+
+    void finalizeMultiDof() override {
+        allocateJacobiansMultiDof();
+        m_numDofsFinalized = m_jacSizeBoth;
+    }
+    int getIslandIdA() const override { return m_a.body->getIslandTag(); }
+    int getIslandIdB() const override { return m_a.body->getIslandTag(); }
+    void debugDraw(btIDebugDraw*) override {}
+
+    void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
+                              const btContactSolverInfo& info) override {
+        if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
+        const btMatrix3x3 rotA = m_a.body->getWorldTransform().getBasis();
+        const btMatrix3x3 rotB = m_b.body ? m_b.body->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
+        const btScalar dt = info.m_timeStep;
+        btScalar margin = 0;
+        if (m_policy.speculative) {
+            // As the rigid rows: the angle the joint can turn in about two steps at its current rate.
+            const btVector3 wB = m_b.angularVelocity ? *m_b.angularVelocity : btVector3(0, 0, 0);
+            margin = (*m_a.angularVelocity - wB).length() * dt * 2 + btScalar(0.01);
+        }
+        LimitRow found[2];
+        int n = 0;
+        if (const auto* d = std::get_if<Direction>(&m_limit))
+            n = directionLimitRows(rotA * d->shaftInA, rotB * d->basisInB, d->shape, d->half1, d->half2, margin, found);
+        else if (const auto* h = std::get_if<Hinge>(&m_limit))
+            n = hingeRangeRow(rotA * h->frameInA, rotB * h->frameInB, h->lower, h->upper, margin, found[0]);
+        const int ndof = m_bodyA->getNumDofs() + 6;
+        m_jac.resize(static_cast<std::size_t>(ndof));
+        m_jacB.resize(static_cast<std::size_t>(ndof));
+        const btVector3 zero(0, 0, 0);
+        const btVector3 pointA = m_a.body->getWorldTransform().getOrigin();
+        for (int i = 0; i < n; ++i) {
+            const LimitRow& r = found[i];
+            // The excess grows at axis·(ωA − ωB): the row's velocity J·q̇ = (ωB − ωA)·axis, so a positive impulse
+            // reduces the excess (as setLimitRow's rows for rigid bodies).
+            m_bodyA->fillConstraintJacobianMultiDof(m_a.link, pointA, r.axisWorld, zero, m_jac.data(), data.scratch_r,
+                                                    data.scratch_v, data.scratch_m);
+            if (m_b.body) {
+                m_bodyA->fillConstraintJacobianMultiDof(m_b.link, pointA, r.axisWorld, zero, m_jacB.data(),
+                                                        data.scratch_r, data.scratch_v, data.scratch_m);
+                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = m_jacB[k] - m_jac[k];
+            } else {
+                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = -m_jac[k];
+            }
+            // Target row velocity: past the limit, Baumgarte recovery of the limit ERP per step; before it
+            // (speculative), the joint may close at most the remaining gap in this step. Bullet turns the
+            // position error e into the target −e·erp/dt with the world's joint ERP, so e is scaled by it.
+            const btScalar target = r.excess > 0 ? m_policy.errorReduction * r.excess / dt : r.excess / dt;
+            const btScalar erp = info.m_erp > 0 ? info.m_erp : btScalar(1);
+            btMultiBodySolverConstraint& row = rows.expandNonInitializing();
+            row.m_solverBodyIdA = data.m_fixedBodyId;
+            row.m_solverBodyIdB = data.m_fixedBodyId;
+            fillMultiBodyConstraint(row, data, m_jac.data(), nullptr, -r.axisWorld, zero, pointA, pointA,
+                                    -target * dt / erp, info, 0, SIMD_INFINITY, true, 1, false, 0, 0, 1);
+            row.m_orgConstraint = this;
+            row.m_orgDofIndex = i;
+        }
+    }
+
+  private:
+    Side m_a, m_b;
+    std::variant<Direction, Hinge> m_limit;
+    LimitRowPolicy m_policy;
+    std::vector<btScalar> m_jac, m_jacB;
+};
+
+} // namespace
+
+// A link's collider with the figure's §6.2 rules between the ragdoll's own bodies (Bullet's own rule knows only
+// parent–child pairs of one tree).
+class MultibodyRagdoll::LinkCollider : public btMultiBodyLinkCollider {
+  public:
+    LinkCollider(btMultiBody* tree, int link, const MultibodyRagdoll& owner, int body)
+        : btMultiBodyLinkCollider(tree, link), m_owner(owner), m_body(body) {
+        m_checkCollideWith = 1; // Bullet asks checkCollideWithOverride for every pair
+    }
+    bool checkCollideWithOverride(const btCollisionObject* co) const override {
+        const btMultiBodyLinkCollider* other = btMultiBodyLinkCollider::upcast(co);
+        if (other == nullptr) return true;
+        const auto& parts = m_owner.m_parts;
+        const bool ours =
+            std::any_of(parts.begin(), parts.end(), [&](const Part& p) { return p.body.get() == other->m_multiBody; });
+        if (!ours) return true;
+        const int b = static_cast<const LinkCollider*>(other)->m_body;
+        return std::binary_search(m_owner.m_colliding.begin(), m_owner.m_colliding.end(),
+                                  std::make_pair(std::min(m_body, b), std::max(m_body, b)));
+    }
+
+  private:
+    const MultibodyRagdoll& m_owner;
+    int m_body;
+};
+
+// Per substep (Bullet runs actions after integration): the damping, the angular velocities the limits' margins
+// read, and the figure's rest rules (§6.1).
+class MultibodyRagdoll::Action : public btActionInterface {
+  public:
+    Action(MultibodyRagdoll& owner, bool comeToRest) : m_owner(owner), m_comeToRest(comeToRest) {}
+    bool atRest = false;
+    double activeTime = 0;
+
+    void updateAction(btCollisionWorld*, btScalar dt) override {
+        if (atRest) {
+            for (const auto& c : m_owner.m_colliders)
+                if (c->isActive()) {
+                    wake();
+                    break;
+                }
+            return;
+        }
+        activeTime += dt;
+        m_owner.dampVelocities(dt);
+        const std::vector<BodySample> samples = m_owner.samples();
+        for (std::size_t i = 0; i < samples.size(); ++i) m_owner.m_angularVelocity[i] = samples[i].angularVelocity;
+        if (m_comeToRest && m_rest.update(samples, dt, activeTime)) m_owner.putToRest();
+    }
+    void debugDraw(btIDebugDraw*) override {}
+
+    void wake() {
+        atRest = false;
+        activeTime = 0;
+        m_rest.reset();
+        for (Part& p : m_owner.m_parts) {
+            p.body->setCanSleep(false);
+            p.body->wakeUp();
+        }
+        for (const auto& c : m_owner.m_colliders) c->activate(true);
+    }
+
+  private:
+    MultibodyRagdoll& m_owner;
+    bool m_comeToRest;
+    RestTest m_rest{m_owner.m_asset->figure().rest};
+};
+
+MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world,
+                                   const SpawnOptions& options)
+    : m_asset(std::move(asset)), m_world([&]() -> btMultiBodyDynamicsWorld& {
+          auto* w = dynamic_cast<btMultiBodyDynamicsWorld*>(&world);
+          if (w == nullptr) throw std::invalid_argument(kNeedsMultiBodyWorld);
+          return *w;
+      }()),
+      m_spawn(options.entityTransform) {
+    const figure::Figure& f = m_asset->figure();
+    m_colliding = figure::selfCollisionPairs(f);
+    m_angularVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
+    // Damping: the rigid backend scales each body's velocities by (1 − d)^dt per step (btRigidBody's model). In
+    // reduced coordinates the same factor on every generalised velocity scales every body's linear and angular
+    // velocity alike: exact when the figure has one damping (every bundled and corpus figure: the §3.4 friction
+    // of settings), otherwise the mass-weighted mean.
+    double mass = 0, linear = 0, angular = 0;
+    for (const figure::FigureBody& b : f.bodies) {
+        mass += b.massKg;
+        linear += b.massKg * b.linearDamping;
+        angular += b.massKg * b.angularDamping;
+    }
+    if (mass > 0) {
+        m_linearDamping = static_cast<btScalar>(linear / mass);
+        m_angularDamping = static_cast<btScalar>(angular / mass);
+    }
+    m_action = std::make_unique<Action>(*this, options.comeToRest);
+    build(options);
+    addColliders(options);
+    addConstraints(options.method);
+    m_world.addAction(m_action.get());
+    if (options.startAtRest) putToRest();
+}
+
+MultibodyRagdoll::~MultibodyRagdoll() {
+    m_world.removeAction(m_action.get());
+    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it)
+        m_world.removeMultiBodyConstraint(it->get());
+    for (auto it = m_colliders.rbegin(); it != m_colliders.rend(); ++it) m_world.removeCollisionObject(it->get());
+    for (auto it = m_parts.rbegin(); it != m_parts.rend(); ++it) m_world.removeMultiBody(it->body.get());
+}
+
+void MultibodyRagdoll::build(const SpawnOptions& options) {
+    const figure::Figure& f = m_asset->figure();
+    const int n = static_cast<int>(f.bodies.size());
+    m_bodies.assign(static_cast<std::size_t>(n), {});
+    // Tree edges: joints between two bodies (springs are forces), breadth first from each part's first body, in
+    // constraint order, so the origin body is the first tree's base and the build is deterministic.
+    std::vector<std::vector<std::pair<int, int>>> adjacent(static_cast<std::size_t>(n)); // (constraint, body)
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        if (c.type == JointType::Spring || c.body2 < 0 || c.body1 == c.body2) continue;
+        adjacent[static_cast<std::size_t>(c.body1)].emplace_back(static_cast<int>(ci), c.body2);
+        adjacent[static_cast<std::size_t>(c.body2)].emplace_back(static_cast<int>(ci), c.body1);
+    }
+    m_treeEdge.assign(f.constraints.size(), false);
+    std::vector<bool> reached(static_cast<std::size_t>(n), false);
+    auto rotation = [&](int b) { return toBt(f.bodies[static_cast<std::size_t>(b)].loadPose.rotation); };
+    // A body fixed to the world is its tree's base, and that base is fixed: the attachment is then exact.
+    std::vector<int> fixedToWorld(static_cast<std::size_t>(n), -1); // the constraint, per body
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        if (c.type == JointType::Fixed && c.body2 < 0 && fixedToWorld[static_cast<std::size_t>(c.body1)] < 0)
+            fixedToWorld[static_cast<std::size_t>(c.body1)] = static_cast<int>(ci);
+    }
+    std::vector<int> roots;
+    for (int b = 0; b < n; ++b)
+        if (fixedToWorld[static_cast<std::size_t>(b)] >= 0) roots.push_back(b);
+    for (int b = 0; b < n; ++b)
+        if (fixedToWorld[static_cast<std::size_t>(b)] < 0) roots.push_back(b);
+    for (const int root : roots) {
+        if (reached[static_cast<std::size_t>(root)]) continue;
+        Part part;
+        part.root = root;
+        part.fixedBase = fixedToWorld[static_cast<std::size_t>(root)] >= 0;
+        if (part.fixedBase) m_treeEdge[static_cast<std::size_t>(fixedToWorld[static_cast<std::size_t>(root)])] = true;
+        reached[static_cast<std::size_t>(root)] = true;
+        const int partIndex = static_cast<int>(m_parts.size());
+        m_bodies[static_cast<std::size_t>(root)] = {partIndex, -1};
+        std::vector<int> queue{root};
+        int links = 0;
+        for (std::size_t q = 0; q < queue.size(); ++q) {
+            const int p = queue[q];
+            for (const auto& [ci, child] : adjacent[static_cast<std::size_t>(p)]) {
+                if (reached[static_cast<std::size_t>(child)]) continue;
+                reached[static_cast<std::size_t>(child)] = true;
+                m_treeEdge[static_cast<std::size_t>(ci)] = true;
+                const FigureConstraint& c = f.constraints[static_cast<std::size_t>(ci)];
+                const btTransform inChild = toBt(child == c.body1 ? c.frameInBody1 : c.frameInBody2);
+                const btTransform inParent = toBt(child == c.body1 ? c.frameInBody2 : c.frameInBody1);
+                Joint j;
+                j.child = child;
+                j.parent = p;
+                j.zeroParentToChild = rotation(child).transpose() * rotation(p);
+                j.parentToPivot = inParent.getOrigin();
+                j.pivotToChild = -inChild.getOrigin();
+                j.frameInParent = inParent.getBasis();
+                j.frameInChild = inChild.getBasis();
+                switch (c.type) {
+                case JointType::Fixed: j.kind = Joint::Kind::Fixed; break;
+                case JointType::BallAndSocket: j.kind = Joint::Kind::Spherical; break;
+                case JointType::Hinge:
+                    j.kind = Joint::Kind::Revolute;
+                    j.axisInChild = inChild.getBasis().getColumn(2); // §4.5: the frame's Z is the hinge axis
+                    break;
+                case JointType::Slider:
+                    j.kind = Joint::Kind::Prismatic;
+                    j.axisInChild = inChild.getBasis().getColumn(0); // §4.6: the frame's X is the axis
+                    break;
+                case JointType::Universal: j.kind = Joint::Kind::Universal; break;
+                case JointType::Spring: break; // not a tree edge
+                }
+                links += j.kind == Joint::Kind::Universal ? 2 : 1;
+                j.link = links - 1;
+                m_bodies[static_cast<std::size_t>(child)] = {partIndex, j.link};
+                part.joints.push_back(j);
+                queue.push_back(child);
+            }
+        }
+        const figure::FigureBody& base = f.bodies[static_cast<std::size_t>(root)];
+        part.body = std::make_unique<btMultiBody>(links, static_cast<btScalar>(base.massKg), toBt(base.inertiaKgM2),
+                                                  part.fixedBase, false);
+        btMultiBody& mb = *part.body;
+        const btTransform baseWorld = m_spawn * toBt(base.loadPose);
+        mb.setBasePos(baseWorld.getOrigin());
+        mb.setWorldToBaseRot(quatOf(baseWorld.getBasis()).inverse());
+        for (const Joint& j : part.joints) {
+            const figure::FigureBody& b = f.bodies[static_cast<std::size_t>(j.child)];
+            const btScalar m = static_cast<btScalar>(b.massKg);
+            const btVector3 inertia = toBt(b.inertiaKgM2);
+            const int parentLink = m_bodies[static_cast<std::size_t>(j.parent)].link;
+            const btQuaternion q0 = quatOf(j.zeroParentToChild);
+            switch (j.kind) {
+            case Joint::Kind::Fixed:
+                mb.setupFixed(j.link, m, inertia, parentLink, q0, j.parentToPivot, j.pivotToChild, true);
+                break;
+            case Joint::Kind::Spherical:
+                mb.setupSpherical(j.link, m, inertia, parentLink, q0, j.parentToPivot, j.pivotToChild, true);
+                break;
+            case Joint::Kind::Revolute:
+                mb.setupRevolute(j.link, m, inertia, parentLink, q0, j.axisInChild, j.parentToPivot, j.pivotToChild,
+                                 true);
+                break;
+            case Joint::Kind::Prismatic:
+                mb.setupPrismatic(j.link, m, inertia, parentLink, q0, j.axisInChild, j.parentToPivot, j.pivotToChild,
+                                  true);
+                break;
+            case Joint::Kind::Universal: {
+                // §4.4: no spin about the shafts, two free swings: a massless link in the constraint frame turning
+                // about the frame's Y, then the child turning about the frame's Z (a Cardan joint).
+                const btMatrix3x3 frameWorld0 = rotation(j.child) * j.frameInChild;
+                mb.setupRevolute(j.link - 1, 0, btVector3(0, 0, 0), parentLink,
+                                 quatOf(frameWorld0.transpose() * rotation(j.parent)), btVector3(0, 1, 0),
+                                 j.parentToPivot, btVector3(0, 0, 0), true);
+                mb.setupRevolute(j.link, m, inertia, j.link - 1, quatOf(rotation(j.child).transpose() * frameWorld0),
+                                 j.frameInChild.getColumn(2), btVector3(0, 0, 0), j.pivotToChild, true);
+                break;
+            }
+            }
+        }
+        mb.finalizeMultiDof();
+        mb.setLinearDamping(0); // damping is the figure's, see dampVelocities
+        mb.setAngularDamping(0);
+        mb.setMaxCoordinateVelocity(kMaxCoordinateVelocity);
+        mb.setHasSelfCollision(true); // pairs are decided by LinkCollider
+        m_world.addMultiBody(part.body.get(), options.collisionGroup, options.collisionMask);
+        m_parts.push_back(std::move(part));
+    }
+}
+
+void MultibodyRagdoll::addColliders(const SpawnOptions& options) {
+    const figure::Figure& f = m_asset->figure();
+    for (std::size_t i = 0; i < f.bodies.size(); ++i) {
+        const figure::FigureBody& b = f.bodies[i];
+        const BodyRef ref = m_bodies[i];
+        btMultiBody& mb = *m_parts[static_cast<std::size_t>(ref.part)].body;
+        auto col = std::make_unique<LinkCollider>(&mb, ref.link, *this, static_cast<int>(i));
+        col->setCollisionShape(m_asset->shape(static_cast<int>(i)));
+        col->setWorldTransform(m_spawn * toBt(b.loadPose));
+        col->setFriction(static_cast<btScalar>(b.contactFriction));
+        col->setRestitution(static_cast<btScalar>(kBodyRestitution));
+        int mask = options.collisionMask;
+        if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
+        if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
+        if (options.engineContactFriction) {
+            col->setUserIndex2(kEngineFrictionMarker);
+            col->setCollisionFlags(col->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+        }
+        m_world.addCollisionObject(col.get(), options.collisionGroup, mask);
+        if (ref.link < 0) mb.setBaseCollider(col.get());
+        else mb.getLink(ref.link).m_collider = col.get();
+        m_colliders.push_back(std::move(col));
+    }
+    btAlignedObjectArray<btScalar> r;
+    btAlignedObjectArray<btVector3> v;
+    btAlignedObjectArray<btMatrix3x3> m;
+    for (Part& p : m_parts) {
+        refreshTransforms(*p.body);
+        // The articulated-body caches (what an impulse before the first step needs), with no force and no time.
+        p.body->computeAccelerationsArticulatedBodyAlgorithmMultiDof(0, r, v, m, false, false, false);
+    }
+}
+
+void MultibodyRagdoll::addConstraints(const Method& method) {
+    const figure::Figure& f = m_asset->figure();
+    const LimitRowPolicy policy{static_cast<btScalar>(method.limitErp), method.speculativeLimits};
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        const btTransform fa = toBt(c.frameInBody1);
+        const btTransform fb = c.body2 >= 0 ? toBt(c.frameInBody2) : m_spawn * toBt(c.frameInBody2);
+        m_frames.emplace_back(fa, fb);
+        if (c.type == JointType::Spring) continue; // not modelled yet (README: the multibody backend)
+        const BodyRef a = m_bodies[static_cast<std::size_t>(c.body1)];
+        btMultiBody* treeA = m_parts[static_cast<std::size_t>(a.part)].body.get();
+        const bool sameTree = c.body2 < 0 || m_bodies[static_cast<std::size_t>(c.body2)].part == a.part;
+        if (!m_treeEdge[ci]) {
+            // A loop or a world attachment: a constraint on the anchors (and a fixed joint's frames), solved like
+            // a rigid body's joint, so it can separate again.
+            std::unique_ptr<btMultiBodyConstraint> joint;
+            if (c.body2 >= 0) {
+                const BodyRef b = m_bodies[static_cast<std::size_t>(c.body2)];
+                btMultiBody* treeB = m_parts[static_cast<std::size_t>(b.part)].body.get();
+                if (c.type == JointType::Fixed)
+                    joint = std::make_unique<btMultiBodyFixedConstraint>(treeA, a.link, treeB, b.link, fa.getOrigin(),
+                                                                         fb.getOrigin(), fa.getBasis(), fb.getBasis());
+                else
+                    joint = std::make_unique<btMultiBodyPoint2Point>(treeA, a.link, treeB, b.link, fa.getOrigin(),
+                                                                     fb.getOrigin());
+            } else {
+                if (c.type == JointType::Fixed)
+                    joint =
+                        std::make_unique<btMultiBodyFixedConstraint>(treeA, a.link, static_cast<btRigidBody*>(nullptr),
+                                                                     fa.getOrigin(), fb.getOrigin(), fa.getBasis(),
+                                                                     fb.getBasis());
+                else
+                    joint = std::make_unique<btMultiBodyPoint2Point>(treeA, a.link, static_cast<btRigidBody*>(nullptr),
+                                                                     fa.getOrigin(), fb.getOrigin());
+            }
+            joint->setMaxAppliedImpulse(BT_LARGE_FLOAT); // Bullet's default caps it at 100 N·s
+            m_world.addMultiBodyConstraint(joint.get());
+            m_constraints.push_back(std::move(joint));
+        }
+        if (!sameTree) continue; // a limit across two trees: not modelled (no corpus figure has one)
+        // Limits: the rigid backend's rows (Ragdoll::addConstraints), on the links.
+        const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
+        std::optional<std::variant<MultibodyLimit::Direction, MultibodyLimit::Hinge>> limit;
+        if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
+            limit = MultibodyLimit::Direction{LimitShape::Cone, toBt(cone->shaftInBody1),
+                                              basisWithX(b2Rot * toBt(cone->axisInBody2)),
+                                              static_cast<btScalar>(cone->halfAngleRad), 0};
+        else if (const auto* pyramid = std::get_if<figure::PyramidLimit>(&c.limit))
+            limit = MultibodyLimit::Direction{LimitShape::Pyramid, toBt(pyramid->shaftInBody1),
+                                              b2Rot * toBt(pyramid->basisInBody2),
+                                              static_cast<btScalar>(pyramid->halfAngle1Rad),
+                                              static_cast<btScalar>(pyramid->halfAngle2Rad)};
+        else if (const auto* range = std::get_if<figure::HingeRange>(&c.limit))
+            limit = MultibodyLimit::Hinge{fa.getBasis(), fb.getBasis(), static_cast<btScalar>(range->lowerRad),
+                                          static_cast<btScalar>(range->upperRad)};
+        if (!limit) continue;
+        const MultibodyLimit::Side sideA{a.link, m_colliders[static_cast<std::size_t>(c.body1)].get(),
+                                         &m_angularVelocity[static_cast<std::size_t>(c.body1)]};
+        MultibodyLimit::Side sideB;
+        if (c.body2 >= 0)
+            sideB = {m_bodies[static_cast<std::size_t>(c.body2)].link,
+                     m_colliders[static_cast<std::size_t>(c.body2)].get(),
+                     &m_angularVelocity[static_cast<std::size_t>(c.body2)]};
+        auto row = std::make_unique<MultibodyLimit>(treeA, sideA, sideB, *limit, policy);
+        m_world.addMultiBodyConstraint(row.get());
+        m_constraints.push_back(std::move(row));
+    }
+}
+
+void MultibodyRagdoll::refreshTransforms(btMultiBody& body) {
+    btAlignedObjectArray<btQuaternion> q;
+    btAlignedObjectArray<btVector3> o;
+    body.forwardKinematics(q, o);
+    body.updateCollisionObjectWorldTransforms(q, o);
+}
+
+void MultibodyRagdoll::dampVelocities(btScalar dt) {
+    if (m_linearDamping <= 0 && m_angularDamping <= 0) return;
+    const btScalar d = btScalar(0.5) * (m_linearDamping + m_angularDamping);
+    const btScalar k = btPow(btScalar(1) - d, dt);
+    for (Part& p : m_parts) {
+        btMultiBody& mb = *p.body;
+        mb.setBaseVel(mb.getBaseVel() * k);
+        mb.setBaseOmega(mb.getBaseOmega() * k);
+        for (int l = 0; l < mb.getNumLinks(); ++l) {
+            btScalar* v = mb.getJointVelMultiDof(l);
+            for (int dof = 0; dof < mb.getLink(l).m_dofCount; ++dof) v[dof] *= k;
+        }
+    }
+}
+
+btCollisionObject& MultibodyRagdoll::collider(int i) { return *m_colliders[static_cast<std::size_t>(i)]; }
+const btCollisionObject& MultibodyRagdoll::collider(int i) const { return *m_colliders[static_cast<std::size_t>(i)]; }
+
+std::vector<BodySample> MultibodyRagdoll::samples() const {
+    std::vector<BodySample> out(m_bodies.size());
+    std::vector<btVector3> omega, vel;
+    for (std::size_t k = 0; k < m_parts.size(); ++k) {
+        const btMultiBody& mb = *m_parts[k].body;
+        omega.resize(static_cast<std::size_t>(mb.getNumLinks() + 1));
+        vel.resize(omega.size());
+        mb.compTreeLinkVelocities(omega.data(), vel.data()); // in each link's frame
+        for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+            if (m_bodies[i].part != static_cast<int>(k)) continue;
+            const btTransform& t = m_colliders[i]->getWorldTransform();
+            const std::size_t slot = static_cast<std::size_t>(m_bodies[i].link + 1);
+            out[i] = {t, t.getBasis() * vel[slot], t.getBasis() * omega[slot]};
+        }
+    }
+    return out;
+}
+
+std::vector<btTransform> MultibodyRagdoll::transforms() const {
+    std::vector<btTransform> out;
+    out.reserve(m_colliders.size());
+    for (const auto& c : m_colliders) out.push_back(c->getWorldTransform());
+    return out;
+}
+
+std::pair<btTransform, btTransform> MultibodyRagdoll::constraintFramesWorld(int i) const {
+    const std::vector<btTransform> t = transforms();
+    return constraintFramesWorldOf(m_asset->figure().constraints[static_cast<std::size_t>(i)], t,
+                                   m_frames[static_cast<std::size_t>(i)]);
+}
+
+JointError MultibodyRagdoll::jointError(int i) const {
+    return jointErrorOf(m_asset->figure().constraints[static_cast<std::size_t>(i)], transforms(),
+                        m_frames[static_cast<std::size_t>(i)], m_spawn);
+}
+
+int MultibodyRagdoll::awakeBodyCount() const {
+    int n = 0;
+    for (const auto& c : m_colliders) n += c->isActive() ? 1 : 0;
+    return n;
+}
+
+void MultibodyRagdoll::setBodyStates(std::span<const figure::BodyState> states) {
+    auto pose = [&](int b) { return toBt(states[static_cast<std::size_t>(b)].pose); };
+    auto omega = [&](int b) { return toBt(states[static_cast<std::size_t>(b)].angularVelocity); };
+    auto velocity = [&](int b) { return toBt(states[static_cast<std::size_t>(b)].linearVelocity); };
+    for (Part& p : m_parts) {
+        btMultiBody& mb = *p.body;
+        if (!p.fixedBase) { // a fixed base stays where the world holds it
+            const btTransform base = pose(p.root);
+            mb.setBasePos(base.getOrigin());
+            mb.setWorldToBaseRot(quatOf(base.getBasis()).inverse());
+            mb.setBaseVel(velocity(p.root));
+            mb.setBaseOmega(omega(p.root));
+        }
+        for (const Joint& j : p.joints) {
+            const btTransform tp = pose(j.parent), tc = pose(j.child);
+            const btVector3 wRel = omega(j.child) - omega(j.parent);
+            // Zero coordinates put the child at R_P·R0ᵀ; a revolute coordinate q turns it about its axis by q
+            // (btMultibodyLink::updateCacheMultiDof), a spherical one by its quaternion, both in the child's frame.
+            const btMatrix3x3 local = j.zeroParentToChild * tp.getBasis().transpose() * tc.getBasis();
+            switch (j.kind) {
+            case Joint::Kind::Fixed: break;
+            case Joint::Kind::Revolute: {
+                const btQuaternion q = quatOf(local);
+                const btScalar along = btVector3(q.x(), q.y(), q.z()).dot(j.axisInChild);
+                mb.setJointPos(j.link, 2 * btAtan2(along, q.w()));
+                mb.setJointVel(j.link, (tc.getBasis() * j.axisInChild).dot(wRel));
+                break;
+            }
+            case Joint::Kind::Prismatic: {
+                const btVector3 offset = tc.getOrigin() - tp.getOrigin();
+                const btVector3 inChild = tc.getBasis().transpose() * (offset - tp.getBasis() * j.parentToPivot);
+                mb.setJointPos(j.link, (inChild - j.pivotToChild).dot(j.axisInChild));
+                const btVector3 rel = velocity(j.child) - velocity(j.parent) - omega(j.parent).cross(offset);
+                mb.setJointVel(j.link, (tc.getBasis() * j.axisInChild).dot(rel));
+                break;
+            }
+            case Joint::Kind::Spherical: {
+                const btQuaternion q = quatOf(local);
+                btScalar pos[4] = {q.x(), q.y(), q.z(), q.w()};
+                mb.setJointPosMultiDof(j.link, pos);
+                const btVector3 w = tc.getBasis().transpose() * wRel;
+                btScalar vel[3] = {w.x(), w.y(), w.z()};
+                mb.setJointVelMultiDof(j.link, vel);
+                break;
+            }
+            case Joint::Kind::Universal: {
+                // G = frame(parent)ᵀ·frame(child) = Ry(q1)·Rz(q2): the massless link turns about the frame's Y,
+                // the child then about the turned frame's Z.
+                const btMatrix3x3 fp = tp.getBasis() * j.frameInParent, fc = tc.getBasis() * j.frameInChild;
+                const btMatrix3x3 g = fp.transpose() * fc;
+                mb.setJointPos(j.link - 1, btAtan2(g[0][2], g[2][2]));
+                mb.setJointPos(j.link, btAtan2(g[1][0], g[1][1]));
+                mb.setJointVel(j.link - 1, fp.getColumn(1).dot(wRel));
+                mb.setJointVel(j.link, fc.getColumn(2).dot(wRel));
+                break;
+            }
+            }
+        }
+        refreshTransforms(mb);
+    }
+    wake();
+}
+
+void MultibodyRagdoll::applyImpulse(int i, const btVector3& impulse, const btVector3& worldPoint) {
+    const BodyRef ref = m_bodies[static_cast<std::size_t>(i)];
+    btMultiBody& mb = *m_parts[static_cast<std::size_t>(ref.part)].body;
+    const btScalar magnitude = impulse.length();
+    if (!(magnitude > 0)) return;
+    const int ndof = mb.getNumDofs() + 6;
+    std::vector<btScalar> jac(static_cast<std::size_t>(ndof)), delta(static_cast<std::size_t>(ndof));
+    btAlignedObjectArray<btScalar> r;
+    btAlignedObjectArray<btVector3> v;
+    btAlignedObjectArray<btMatrix3x3> m;
+    // Δq̇ = M⁻¹·Jᵀ·|p| for the direction of p at the point: how the solver applies a contact impulse.
+    mb.fillContactJacobianMultiDof(ref.link, worldPoint, impulse / magnitude, jac.data(), r, v, m);
+    for (btScalar& x : jac) x *= magnitude;
+    mb.calcAccelerationDeltasMultiDof(jac.data(), delta.data(), r, v);
+    mb.applyDeltaVeeMultiDof(delta.data(), 1);
+}
+
+bool MultibodyRagdoll::atRest() const { return m_action->atRest; }
+double MultibodyRagdoll::activeSeconds() const { return m_action->activeTime; }
+
+void MultibodyRagdoll::putToRest() {
+    for (Part& p : m_parts) {
+        btMultiBody& mb = *p.body;
+        mb.setBaseVel(btVector3(0, 0, 0));
+        mb.setBaseOmega(btVector3(0, 0, 0));
+        for (int l = 0; l < mb.getNumLinks(); ++l) {
+            btScalar* v = mb.getJointVelMultiDof(l);
+            for (int dof = 0; dof < mb.getLink(l).m_dofCount; ++dof) v[dof] = 0;
+        }
+        mb.setCanSleep(true);
+        mb.goToSleep();
+    }
+    for (const auto& c : m_colliders) c->forceActivationState(ISLAND_SLEEPING);
+    m_action->atRest = true;
+}
+
+void MultibodyRagdoll::wake() { m_action->wake(); }
+
+} // namespace afb::bullet::detail
