@@ -3,6 +3,7 @@
 #include "afb/bullet/Ragdoll.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "EngineFriction.h"
 #include "afb/bullet/Constraints.h"
@@ -24,12 +25,25 @@ class Ragdoll::Action : public btActionInterface {
         const btJointFeedback* feedback;
         btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
     };
-    Action(Ragdoll& owner, bool comeToRest) : m_owner(owner), m_comeToRest(comeToRest) {}
+    Action(Ragdoll& owner, bool comeToRest, ExplosionGuard settings)
+        : guard(std::move(settings)), m_owner(owner), m_comeToRest(comeToRest) {}
+    ExplosionGuard guard;
     std::vector<Friction> frictions;
     bool atRest = false;
     double activeTime = 0;
+    std::vector<btTransform> good; ///< every body after the last substep the guard passed
+    int trips = 0;
+    std::optional<GuardTrip> lastTrip;
 
-    void updateAction(btCollisionWorld*, btScalar dt) override {
+    void updateAction(btCollisionWorld* world, btScalar dt) override {
+        if (!atRest && guard.enabled) {
+            if (auto trip = check()) {
+                restore(*world);
+                report(*trip);
+                return;
+            }
+            remember();
+        }
         for (const Friction& f : frictions)
             f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         if (atRest) {
@@ -53,6 +67,69 @@ class Ragdoll::Action : public btActionInterface {
         for (const auto& b : m_owner.m_bodies) b->activate(true);
     }
 
+    // The guard's test: the first body (in body order) that is non-finite or too fast, then the first constraint
+    // whose anchors are too far apart.
+    std::optional<GuardTrip> check() const {
+        const auto& bodies = m_owner.m_bodies;
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            const btRigidBody& b = *bodies[i];
+            const btTransform& t = b.getCenterOfMassTransform();
+            const btVector3& v = b.getLinearVelocity();
+            const btVector3& w = b.getAngularVelocity();
+            bool finite = true;
+            for (int k = 0; k < 3; ++k)
+                finite = finite && std::isfinite(t.getOrigin()[k]) && std::isfinite(v[k]) && std::isfinite(w[k]) &&
+                         std::isfinite(t.getBasis()[k][0]) && std::isfinite(t.getBasis()[k][1]) &&
+                         std::isfinite(t.getBasis()[k][2]);
+            if (!finite) return trip(GuardTrip::Cause::NonFinite, static_cast<int>(i), -1, 0);
+            const double speed = v.length();
+            if (guard.maxSpeedMps > 0 && speed > guard.maxSpeedMps)
+                return trip(GuardTrip::Cause::Speed, static_cast<int>(i), -1, speed);
+        }
+        if (guard.maxAnchorErrorM > 0)
+            for (int c = 0; c < static_cast<int>(m_owner.figure().constraints.size()); ++c) {
+                const double gap = m_owner.jointError(c).anchorM;
+                if (gap > guard.maxAnchorErrorM) return trip(GuardTrip::Cause::AnchorError, -1, c, gap);
+            }
+        return std::nullopt;
+    }
+    GuardTrip trip(GuardTrip::Cause cause, int body, int constraint, double value) const {
+        return GuardTrip{cause, body, constraint, value, activeTime};
+    }
+    void remember() {
+        const auto& bodies = m_owner.m_bodies;
+        good.resize(bodies.size());
+        for (std::size_t i = 0; i < bodies.size(); ++i) good[i] = bodies[i]->getCenterOfMassTransform();
+    }
+    // Back to the last good substep, frozen; nothing of the bad state stays where the solver would read it again:
+    // not the contacts' or joints' last impulses (warm starting), not the joint friction's feedback.
+    void restore(btCollisionWorld& world) {
+        auto& bodies = m_owner.m_bodies;
+        for (std::size_t i = 0; i < bodies.size() && i < good.size(); ++i) {
+            btRigidBody& b = *bodies[i];
+            b.setCenterOfMassTransform(good[i]);
+            b.setInterpolationWorldTransform(good[i]);
+            b.setInterpolationLinearVelocity(btVector3(0, 0, 0));
+            b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+            b.clearForces();
+            if (b.getBroadphaseHandle()) {
+                world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
+                                                                                      world.getDispatcher());
+                b.forceActivationState(ISLAND_SLEEPING); // an AABB overflow disabled it: updateSingleAabb skips those
+                world.updateSingleAabb(&b);
+            }
+        }
+        for (const auto& fb : m_owner.m_feedback) *fb = btJointFeedback();
+        for (const auto& c : m_owner.m_constraints) c->internalSetAppliedImpulse(0);
+        if (m_owner.m_manager) m_owner.m_manager->restartWarmStarting(m_owner);
+        m_owner.putToRest();
+    }
+    void report(const GuardTrip& t) {
+        ++trips;
+        lastTrip = t;
+        if (guard.onTrip) guard.onTrip(m_owner, t);
+    }
+
   private:
     Ragdoll& m_owner;
     bool m_comeToRest;
@@ -62,8 +139,9 @@ class Ragdoll::Action : public btActionInterface {
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
     : m_asset(std::move(asset)), m_world(world), m_method(options.method),
       m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
-      m_action(std::make_unique<Action>(*this, options.comeToRest)) {
+      m_action(std::make_unique<Action>(*this, options.comeToRest, options.guard)) {
     addBodies(options);
+    m_action->remember();
     addConstraints();
     filterPairs();
     m_world.addAction(m_action.get());
@@ -103,6 +181,7 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
         m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
                                                                                 m_world.getDispatcher());
     }
+    m_action->remember();
     wake();
     return true;
 }
@@ -131,6 +210,30 @@ void Ragdoll::putToRest() {
 }
 
 void Ragdoll::wake() { m_action->wake(); }
+
+bool Ragdoll::checkGuard() {
+    if (!m_action->guard.enabled || m_action->atRest) return false;
+    const auto trip = m_action->check();
+    if (!trip) return false;
+    m_action->restore(m_world);
+    m_action->report(*trip);
+    return true;
+}
+
+void Ragdoll::freeze() { m_action->restore(m_world); }
+
+int Ragdoll::guardTrips() const { return m_action->trips; }
+
+const std::optional<GuardTrip>& Ragdoll::lastGuardTrip() const { return m_action->lastTrip; }
+
+std::string_view toString(GuardTrip::Cause cause) {
+    switch (cause) {
+    case GuardTrip::Cause::NonFinite: return "non-finite";
+    case GuardTrip::Cause::Speed: return "speed";
+    case GuardTrip::Cause::AnchorError: return "anchor-error";
+    }
+    return "?";
+}
 
 Ragdoll::~Ragdoll() {
     if (m_manager) m_manager->detach(*this);

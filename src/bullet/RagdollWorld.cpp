@@ -170,6 +170,7 @@ RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
 RagdollWorld::~RagdollWorld() { m_world.removeAction(m_action.get()); }
 
 void RagdollWorld::step(double dtSeconds) {
+    for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step
     const int substeps = std::max(1, m_method.substeps);
     m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
 }
@@ -178,6 +179,12 @@ void RagdollWorld::attach(Ragdoll& r) {
     if (m_method.speculativeContacts)
         for (int i = 0; i < r.bodyCount(); ++i)
             if (r.body(i).getUserIndex2() == kEngineFrictionMarker) r.body(i).setUserIndex2(kSpeculativeFrictionMarker);
+    trackJoints(r);
+    m_ragdolls.push_back(&r);
+    rebuildOwners();
+}
+
+void RagdollWorld::trackJoints(Ragdoll& r) {
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
         solver != nullptr && r.method().jointWarmStarting)
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
@@ -190,8 +197,12 @@ void RagdollWorld::attach(Ragdoll& r) {
                 continue;
             solver->track(c);
         }
-    m_ragdolls.push_back(&r);
-    rebuildOwners();
+}
+
+void RagdollWorld::restartWarmStarting(Ragdoll& r) {
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
+        for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+    trackJoints(r);
 }
 
 void RagdollWorld::detach(Ragdoll& r) {
