@@ -25,9 +25,10 @@ class Ragdoll::Action : public btActionInterface {
         const btJointFeedback* feedback;
         btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
     };
-    Action(Ragdoll& owner, bool comeToRest, ExplosionGuard settings)
-        : guard(std::move(settings)), m_owner(owner), m_comeToRest(comeToRest) {}
+    Action(Ragdoll& owner, bool comeToRest, ExplosionGuard settings, VelocityClamp clampSettings)
+        : guard(std::move(settings)), clamp(clampSettings), m_owner(owner), m_comeToRest(comeToRest) {}
     ExplosionGuard guard;
+    VelocityClamp clamp;
     std::vector<Friction> frictions;
     bool atRest = false;
     double activeTime = 0;
@@ -44,6 +45,7 @@ class Ragdoll::Action : public btActionInterface {
             }
             remember();
         }
+        if (!atRest && (clamp.maxLinearMps > 0 || clamp.maxAngularRadps > 0)) clampVelocities();
         for (const Friction& f : frictions)
             f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         if (atRest) {
@@ -65,6 +67,17 @@ class Ragdoll::Action : public btActionInterface {
         activeTime = 0;
         m_rest.reset();
         for (const auto& b : m_owner.m_bodies) b->activate(true);
+    }
+
+    void clampVelocities() {
+        for (const auto& b : m_owner.m_bodies) {
+            const btVector3 v = b->getLinearVelocity(), w = b->getAngularVelocity();
+            const btScalar speed = v.length(), spin = w.length();
+            if (clamp.maxLinearMps > 0 && speed > clamp.maxLinearMps)
+                b->setLinearVelocity(v * (static_cast<btScalar>(clamp.maxLinearMps) / speed));
+            if (clamp.maxAngularRadps > 0 && spin > clamp.maxAngularRadps)
+                b->setAngularVelocity(w * (static_cast<btScalar>(clamp.maxAngularRadps) / spin));
+        }
     }
 
     // The guard's test: the first body (in body order) that is non-finite or too fast, then the first constraint
@@ -139,7 +152,7 @@ class Ragdoll::Action : public btActionInterface {
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
     : m_asset(std::move(asset)), m_world(world), m_method(options.method),
       m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
-      m_action(std::make_unique<Action>(*this, options.comeToRest, options.guard)) {
+      m_action(std::make_unique<Action>(*this, options.comeToRest, options.guard, options.velocityClamp)) {
     addBodies(options);
     m_action->remember();
     addConstraints();

@@ -27,7 +27,7 @@ std::string gpQuoted(const std::string& s) {
 // stress.dat (one row per cell: method column, scenario row, 0 pass / 0.5 skipped / 1 fail, label) and stress.gp,
 // which renders stress.png: green cells pass, red cells fail with the cause and time written in them.
 std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim::StressResult>& results,
-                         const std::vector<sim::ChartMethod>& methods, const std::vector<std::string>& scenarios) {
+                         const std::vector<sim::StressMethod>& methods, const std::vector<std::string>& scenarios) {
     std::ostringstream data, gp;
     const int rows = static_cast<int>(scenarios.size()), cols = static_cast<int>(methods.size());
     for (const sim::StressResult& r : results) {
@@ -87,7 +87,8 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("--base", opt->base, "Content folder with the humanoid (af/, def/, models/)")
         ->capture_default_str();
-    cmd->add_option("--methods", opt->methods, "Methods, comma-separated (NAME[:KNOB=VALUE]..., as afb chart)")
+    cmd->add_option("--methods", opt->methods,
+                    "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp")
         ->delimiter(',')
         ->capture_default_str();
     cmd->add_option("--scenarios", opt->scenarios, "Scenarios, comma-separated (default: all; --list names them)")
@@ -111,16 +112,16 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
             exitCode = 1;
             return;
         }
-        std::vector<sim::ChartMethod> methods;
+        std::vector<sim::StressMethod> methods;
         for (const std::string& spec : opt->methods) {
             std::string error;
-            auto m = sim::parseChartMethod(spec, error);
+            auto m = sim::parseStressMethod(spec, error);
             if (!m) {
                 std::cerr << "afb stress: " << error << "\n";
                 exitCode = 1;
                 return;
             }
-            for (const sim::ChartMethod& other : methods)
+            for (const sim::StressMethod& other : methods)
                 if (other.label == m->label) {
                     std::cerr << "afb stress: method " << spec << " is listed twice\n";
                     exitCode = 1;

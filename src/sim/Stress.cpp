@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "afb/bullet/Convert.h"
+#include "afb/figure/Stabilize.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
@@ -285,12 +286,42 @@ double figureEnergyJ(const figure::Figure& figure, const std::vector<figure::Bod
     return e;
 }
 
-StressResult runStress(const StressSetup& setup, const ChartMethod& method, const StressThresholds& thresholds) {
+std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string& error) {
+    const std::size_t plus = spec.find('+');
+    auto base = parseChartMethod(spec.substr(0, plus), error);
+    if (!base) return std::nullopt;
+    StressMethod m;
+    static_cast<ChartMethod&>(m) = std::move(*base);
+    m.label = std::string(spec);
+    std::string_view rest = plus == std::string_view::npos ? std::string_view() : spec.substr(plus + 1);
+    while (plus != std::string_view::npos) {
+        const std::size_t next = rest.find('+');
+        const std::string_view item = rest.substr(0, next);
+        if (item == "stabilize") m.stabilize = true;
+        else if (item == "clamp") m.clamp = {kStressClampLinearMps, kStressClampAngularRadps};
+        else {
+            error = "method " + std::string(spec) + ": unknown mitigation '+" + std::string(item) +
+                    "' (+stabilize, +clamp)";
+            return std::nullopt;
+        }
+        if (next == std::string_view::npos) break;
+        rest = rest.substr(next + 1);
+    }
+    if (isRaw(m.method) && (m.stabilize || m.clamp.maxLinearMps > 0)) {
+        error = "method " + std::string(spec) + ": raw (plain Bullet) takes no mitigations";
+        return std::nullopt;
+    }
+    return m;
+}
+
+StressResult runStress(const StressSetup& setup, const StressMethod& method, const StressThresholds& thresholds) {
     StressResult r;
     r.method = method.label;
     if (setup.figures.empty() || setup.spawns.empty()) return r;
     std::vector<std::shared_ptr<const bullet::RagdollAsset>> assets;
-    for (const figure::Figure& f : setup.figures) assets.push_back(bullet::RagdollAsset::create(f));
+    for (const figure::Figure& f : setup.figures)
+        assets.push_back(
+            bullet::RagdollAsset::create(method.stabilize ? figure::stabilizeMassProperties(f) : figure::Figure(f)));
     Scene scene(method.method, SceneSettings{setup.figures.front().units.gravityMps2, true, 1.0});
     GuardReport guard;
     for (const StressSpawn& s : setup.spawns) {
@@ -311,6 +342,7 @@ StressResult runStress(const StressSetup& setup, const ChartMethod& method, cons
         // The rest rules would put a jittering figure to sleep (or stop it after maxMoveTime): the stress judges
         // the method's own physics, so rest is measured (StressThresholds), never imposed.
         so.comeToRest = false;
+        so.velocityClamp = method.clamp;
         const auto& asset = assets[s.figure];
         r.bodies += static_cast<int>(asset->figure().bodies.size());
         if (isRaw(method.method)) scene.spawnRaw(asset, so);
@@ -322,7 +354,7 @@ StressResult runStress(const StressSetup& setup, const ChartMethod& method, cons
 }
 
 std::vector<StressResult> runStressMatrix(const std::vector<const StressScenario*>& scenarios,
-                                          const std::vector<ChartMethod>& methods, const StressContent& content,
+                                          const std::vector<StressMethod>& methods, const StressContent& content,
                                           const StressThresholds& thresholds, int threads,
                                           const std::function<void(int done, int total)>& progress) {
     std::vector<std::optional<StressSetup>> setups;
@@ -389,12 +421,12 @@ const StressResult* cell(const std::vector<StressResult>& results, const std::st
 
 } // namespace
 
-std::string stressTable(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods) {
+std::string stressTable(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods) {
     const std::vector<std::string> scenarios = scenarioOrder(results);
     std::size_t first = 8;
     for (const std::string& s : scenarios) first = std::max(first, s.size());
     std::vector<std::size_t> widths;
-    for (const ChartMethod& m : methods) {
+    for (const StressMethod& m : methods) {
         std::size_t w = std::max<std::size_t>(m.label.size(), 4);
         for (const StressResult& r : results)
             if (r.method == m.label) w = std::max(w, cellText(r).size());
@@ -418,7 +450,7 @@ std::string stressTable(const std::vector<StressResult>& results, const std::vec
     return out;
 }
 
-std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods,
+std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                            const StressThresholds& th) {
     std::string out =
         "# afb stress\n\nBullet " + bulletVersion() + " (" + bulletPrecision() +
@@ -433,14 +465,14 @@ std::string stressMarkdown(const std::vector<StressResult>& results, const std::
         " cm after " + fixed(th.penetrationAfterS, 0) + " s), energy (a gain over " + fixed(th.maxEnergyGainJ, 0) +
         " J beyond external work), jitter (a body reporting over " + fixed(th.maxResidualSpinRadps, 0) +
         " rad/s in the rest window, or in the last second of a run that never rests), no-rest.\n\n| scenario |";
-    for (const ChartMethod& m : methods) out += " `" + m.label + "` |";
+    for (const StressMethod& m : methods) out += " `" + m.label + "` |";
     out += "\n|---|";
     for (std::size_t m = 0; m < methods.size(); ++m) out += "---|";
     out += "\n";
     const std::vector<std::string> scenarios = scenarioOrder(results);
     for (const std::string& s : scenarios) {
         out += "| " + s + " |";
-        for (const ChartMethod& m : methods) {
+        for (const StressMethod& m : methods) {
             const StressResult* r = cell(results, s, m.label);
             if (!r) out += " |";
             else if (r->passed()) out += " ok (rest " + fixed(r->restAtS.value_or(0), 1) + " s) |";
@@ -467,7 +499,7 @@ std::string stressMarkdown(const std::vector<StressResult>& results, const std::
     return out;
 }
 
-std::string stressJson(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods,
+std::string stressJson(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                        const StressThresholds& th) {
     nlohmann::ordered_json j;
     j["bullet"] = bulletVersion();
@@ -484,10 +516,15 @@ std::string stressJson(const std::vector<StressResult>& results, const std::vect
                        {"rest_turn_deg", th.restTurnDeg},
                        {"rest_window_s", th.restWindowS}};
     nlohmann::ordered_json ms = nlohmann::ordered_json::array();
-    for (const ChartMethod& m : methods) {
+    for (const StressMethod& m : methods) {
         nlohmann::ordered_json knobs;
         for (const bullet::MethodKnob& k : bullet::methodKnobs()) knobs[std::string(k.name)] = knobValue(m.method, k);
-        ms.push_back({{"label", m.label}, {"name", m.method.name}, {"knobs", knobs}});
+        ms.push_back({{"label", m.label},
+                      {"name", m.method.name},
+                      {"knobs", knobs},
+                      {"stabilize", m.stabilize},
+                      {"clamp_linear_mps", m.clamp.maxLinearMps},
+                      {"clamp_angular_radps", m.clamp.maxAngularRadps}});
     }
     j["methods"] = ms;
     nlohmann::ordered_json cells = nlohmann::ordered_json::array();

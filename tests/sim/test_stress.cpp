@@ -22,9 +22,9 @@ sim::StressContent bundled() {
     return c;
 }
 
-sim::ChartMethod method(const char* spec) {
+sim::StressMethod method(const char* spec) {
     std::string error;
-    auto m = sim::parseChartMethod(spec, error);
+    auto m = sim::parseStressMethod(spec, error);
     INFO(error);
     REQUIRE(m);
     return *m;
@@ -64,7 +64,7 @@ TEST_CASE("stress: every scenario builds, names are unique, the CI subset exists
 }
 
 TEST_CASE("stress: the detector reports the first failure with its documented cause", "[sim][stress]") {
-    const sim::ChartMethod def = method("default");
+    const sim::StressMethod def = method("default");
     SECTION("a body faster than 100 m/s: speed, in the first step") {
         sim::StressSetup s = setupOf("tiny-bodies");
         s.spawns[0].linearVelocity = Eigen::Vector3d(150, 0, 0);
@@ -114,7 +114,7 @@ TEST_CASE("stress: the detector reports the first failure with its documented ca
 // The CI subset: the default method passes every row of it (the full matrix: afb stress, README "Stability").
 TEST_CASE("stress: the default method passes the CI subset of the matrix", "[sim][stress]") {
     const sim::StressContent content = bundled();
-    const sim::ChartMethod def = method("default");
+    const sim::StressMethod def = method("default");
     for (std::string_view name : sim::stressCiScenarios()) {
         const sim::StressScenario* s = sim::findStressScenario(name);
         REQUIRE(s != nullptr);
@@ -128,7 +128,7 @@ TEST_CASE("stress: the default method passes the CI subset of the matrix", "[sim
 TEST_CASE("stress: runs are deterministic and the matrix does not depend on the thread count", "[sim][stress]") {
     std::vector<const sim::StressScenario*> scenarios = {sim::findStressScenario("chain-mass-10"),
                                                          sim::findStressScenario("overlap")};
-    const std::vector<sim::ChartMethod> methods = {method("raw"), method("fast")};
+    const std::vector<sim::StressMethod> methods = {method("raw"), method("fast")};
     const auto one = sim::runStressMatrix(scenarios, methods, {}, {}, 1);
     const auto two = sim::runStressMatrix(scenarios, methods, {}, {}, 2);
     REQUIRE(one.size() == 4);
@@ -271,4 +271,27 @@ TEST_CASE("explosion guard: a body beyond the speed bound is restored and frozen
             CHECK(doll.body(0).getCenterOfMassPosition().x() > before.x() + 1);
         }
     }
+}
+
+TEST_CASE("velocity clamp: no body leaves a substep faster than the clamp; off by default", "[bullet][guard]") {
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    sim::Scene scene(bullet::Method{}, {.gravityMps2 = 0, .ground = false});
+    bullet::SpawnOptions clamped;
+    clamped.velocityClamp = {10.0, 5.0};
+    bullet::Ragdoll& a = scene.spawn(asset, clamped);
+    bullet::SpawnOptions free;
+    free.entityTransform.setOrigin(btVector3(10, 0, 0));
+    bullet::Ragdoll& b = scene.spawn(asset, free);
+    for (bullet::Ragdoll* d : {&a, &b}) {
+        d->body(0).setLinearVelocity(btVector3(30, 0, 0));
+        d->body(0).setAngularVelocity(btVector3(0, 0, 20));
+    }
+    scene.step(1.0 / 60);
+    for (int i = 0; i < a.bodyCount(); ++i) {
+        CHECK(a.body(i).getLinearVelocity().length() <= 10.0 + 1e-4);
+        CHECK(a.body(i).getAngularVelocity().length() <= 5.0 + 1e-4);
+    }
+    double fastest = 0;
+    for (int i = 0; i < b.bodyCount(); ++i) fastest = std::max(fastest, double(b.body(i).getLinearVelocity().length()));
+    CHECK(fastest > 10);
 }

@@ -56,6 +56,14 @@ struct ExplosionGuard {
     std::function<void(Ragdoll&, const GuardTrip&)> onTrip;
 };
 
+/// Velocity clamps (opt-in): after every substep, a body's linear and angular speeds are scaled down to these
+/// bounds (0: no bound). A clamp caps what one bad solve can throw a body to; it also caps honest motion, so set it
+/// above anything the game needs (README: Stability).
+struct VelocityClamp {
+    double maxLinearMps = 0;
+    double maxAngularRadps = 0;
+};
+
 /// Where and how a ragdoll enters a world.
 struct SpawnOptions {
     /// Entity transform: model space (X forward, Y left, Z up, metres) to world.
@@ -80,6 +88,8 @@ struct SpawnOptions {
     bool engineContactFriction = true;
     /// The explosion guard (on by default).
     ExplosionGuard guard = {};
+    /// Velocity clamps (off by default).
+    VelocityClamp velocityClamp = {};
 };
 
 /// Spawn options that carry what the loaded entity asks for: its "nodrop"/"sleep" flag as startAtRest, and

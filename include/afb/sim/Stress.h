@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Ragdoll.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Placement.h"
 #include "afb/sim/Chart.h"
@@ -104,6 +105,18 @@ const StressScenario* findStressScenario(std::string_view name);
 /// The scenarios CI runs as unit tests (small, deterministic, a few seconds in Debug).
 std::vector<std::string_view> stressCiScenarios();
 
+/// A method of the matrix: a preset or raw with knob overrides (afb chart's NAME[:KNOB=VALUE]...), and the
+/// opt-in mitigations, spelled as suffixes: "+stabilize" (figure::stabilizeMassProperties on every figure),
+/// "+clamp" (bullet::VelocityClamp of kStressClampLinearMps and kStressClampAngularRadps). Raw takes neither.
+struct StressMethod : ChartMethod {
+    bool stabilize = false;
+    bullet::VelocityClamp clamp;
+};
+inline constexpr double kStressClampLinearMps = 50.0;
+inline constexpr double kStressClampAngularRadps = 30.0;
+/// Parses a StressMethod spec ("default", "fast:substeps=2+stabilize+clamp"); nullopt with `error` set on a bad one.
+std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string& error);
+
 /// One cell of the matrix: a scenario run with a method until it fails, comes to rest or reaches restWithinS.
 struct StressResult {
     std::string scenario;
@@ -121,24 +134,24 @@ struct StressResult {
 };
 
 /// Runs one setup with one method (a preset or raw, with any knob overrides). Deterministic for a given build.
-StressResult runStress(const StressSetup& setup, const ChartMethod& method, const StressThresholds& thresholds = {});
+StressResult runStress(const StressSetup& setup, const StressMethod& method, const StressThresholds& thresholds = {});
 
 /// Runs every scenario with every method on `threads` worker threads (each run its own world, so results do not
 /// depend on the thread count); scenarios whose figures are missing from `content` are Skipped. Results in
 /// scenario-major order. `progress(done, total)` is called from the calling thread.
 std::vector<StressResult> runStressMatrix(const std::vector<const StressScenario*>& scenarios,
-                                          const std::vector<ChartMethod>& methods, const StressContent& content,
+                                          const std::vector<StressMethod>& methods, const StressContent& content,
                                           const StressThresholds& thresholds = {}, int threads = 2,
                                           const std::function<void(int done, int total)>& progress = {});
 
 /// The matrix as a fixed-width terminal table: one row per scenario, one column per method, "ok" or the cause and
 /// the time of the first failure.
-std::string stressTable(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods);
+std::string stressTable(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods);
 /// stress.md: the thresholds, the matrix, and every failure with its detail.
-std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods,
+std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                            const StressThresholds& thresholds);
 /// stress.json: thresholds, methods (every knob) and one object per cell.
-std::string stressJson(const std::vector<StressResult>& results, const std::vector<ChartMethod>& methods,
+std::string stressJson(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                        const StressThresholds& thresholds);
 
 /// Kinetic + potential energy of bodies in `states` (figure body order) of `figure`, J; gravity along −Z.
