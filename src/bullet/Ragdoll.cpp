@@ -101,7 +101,16 @@ class Ragdoll::Action : public btActionInterface {
         }
         if (guard.maxAnchorErrorM > 0)
             for (int c = 0; c < static_cast<int>(m_owner.figure().constraints.size()); ++c) {
-                const double gap = m_owner.jointError(c).anchorM;
+                // The anchor copies' distance from the frames alone (jointError also measures limits, in double);
+                // a slider's anchors move apart along its axis by design, jointError measures it off the axis.
+                const figure::FigureConstraint& fc = m_owner.figure().constraints[static_cast<std::size_t>(c)];
+                double gap = 0;
+                if (fc.type == JointType::Spring) continue;
+                if (fc.type == JointType::Slider) gap = m_owner.jointError(c).anchorM;
+                else {
+                    const auto [frame1, frame2] = m_owner.constraintFramesWorld(c);
+                    gap = (frame1.getOrigin() - frame2.getOrigin()).length();
+                }
                 if (gap > guard.maxAnchorErrorM) return trip(GuardTrip::Cause::AnchorError, -1, c, gap);
             }
         return std::nullopt;

@@ -295,3 +295,22 @@ TEST_CASE("velocity clamp: no body leaves a substep faster than the clamp; off b
     for (int i = 0; i < b.bodyCount(); ++i) fastest = std::max(fastest, double(b.body(i).getLinearVelocity().length()));
     CHECK(fastest > 10);
 }
+
+// The guard's cost, on demand: 4 humanoids dropped 1 m, 300 steps, sleeping off, guard as $AFB_GUARD says (on
+// unless "off"). cmake/stress-guard-cost.sh runs it under callgrind, counting inside stepSimulation.
+TEST_CASE("explosion guard: cost run", "[.guard-cost]") {
+    const char* env = std::getenv("AFB_GUARD");
+    const bool enabled = !(env && std::string(env) == "off");
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    sim::Scene scene(bullet::Method{});
+    for (int i = 0; i < 4; ++i) {
+        bullet::SpawnOptions so;
+        so.entityTransform =
+            btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.65 * i)), btVector3(btScalar(3 * i), 0, 1.5));
+        so.comeToRest = false;
+        so.guard.enabled = enabled;
+        scene.spawn(asset, so);
+    }
+    for (int step = 0; step < 300; ++step) scene.step(1.0 / 60);
+    CHECK(scene.ragdolls()[0]->guardTrips() == 0);
+}
