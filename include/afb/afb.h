@@ -23,5 +23,6 @@
 #include "afb/figure/Figure.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
+#include "afb/figure/Stabilize.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/text/Diagnostics.h"

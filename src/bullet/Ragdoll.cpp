@@ -3,6 +3,7 @@
 #include "afb/bullet/Ragdoll.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "EngineFriction.h"
 #include "Multibody.h"
@@ -25,12 +26,27 @@ class Ragdoll::Action : public btActionInterface {
         const btJointFeedback* feedback;
         btScalar coefficientTimesLever; // friction × metres per unit (§4.8 in SI)
     };
-    Action(Ragdoll& owner, bool comeToRest) : m_owner(owner), m_comeToRest(comeToRest) {}
+    Action(Ragdoll& owner, bool comeToRest, ExplosionGuard settings, VelocityClamp clampSettings)
+        : guard(std::move(settings)), clamp(clampSettings), m_owner(owner), m_comeToRest(comeToRest) {}
+    ExplosionGuard guard;
+    VelocityClamp clamp;
     std::vector<Friction> frictions;
     bool atRest = false;
     double activeTime = 0;
+    std::vector<btTransform> good; ///< every body after the last substep the guard passed
+    int trips = 0;
+    std::optional<GuardTrip> lastTrip;
 
-    void updateAction(btCollisionWorld*, btScalar dt) override {
+    void updateAction(btCollisionWorld* world, btScalar dt) override {
+        if (!atRest && guard.enabled) {
+            if (auto trip = check()) {
+                restore(*world);
+                report(*trip);
+                return;
+            }
+            remember();
+        }
+        if (!atRest && (clamp.maxLinearMps > 0 || clamp.maxAngularRadps > 0)) clampVelocities();
         if (atRest) {
             // Frozen (a RagdollWorld's): the world wakes it on contact. Asleep in a plain world: Bullet wakes
             // sleeping bodies touched by active ones, and then the figure wakes as a whole.
@@ -57,6 +73,89 @@ class Ragdoll::Action : public btActionInterface {
         for (const auto& b : m_owner.m_bodies) b->activate(true);
     }
 
+    void clampVelocities() {
+        for (const auto& b : m_owner.m_bodies) {
+            const btVector3 v = b->getLinearVelocity(), w = b->getAngularVelocity();
+            const btScalar speed = v.length(), spin = w.length();
+            if (clamp.maxLinearMps > 0 && speed > clamp.maxLinearMps)
+                b->setLinearVelocity(v * (static_cast<btScalar>(clamp.maxLinearMps) / speed));
+            if (clamp.maxAngularRadps > 0 && spin > clamp.maxAngularRadps)
+                b->setAngularVelocity(w * (static_cast<btScalar>(clamp.maxAngularRadps) / spin));
+        }
+    }
+
+    // The guard's test: the first body (in body order) that is non-finite or too fast, then the first constraint
+    // whose anchors are too far apart.
+    std::optional<GuardTrip> check() const {
+        const auto& bodies = m_owner.m_bodies;
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            const btRigidBody& b = *bodies[i];
+            const btTransform& t = b.getCenterOfMassTransform();
+            const btVector3& v = b.getLinearVelocity();
+            const btVector3& w = b.getAngularVelocity();
+            bool finite = true;
+            for (int k = 0; k < 3; ++k)
+                finite = finite && std::isfinite(t.getOrigin()[k]) && std::isfinite(v[k]) && std::isfinite(w[k]) &&
+                         std::isfinite(t.getBasis()[k][0]) && std::isfinite(t.getBasis()[k][1]) &&
+                         std::isfinite(t.getBasis()[k][2]);
+            if (!finite) return trip(GuardTrip::Cause::NonFinite, static_cast<int>(i), -1, 0);
+            const double speed = v.length();
+            if (guard.maxSpeedMps > 0 && speed > guard.maxSpeedMps)
+                return trip(GuardTrip::Cause::Speed, static_cast<int>(i), -1, speed);
+        }
+        if (guard.maxAnchorErrorM > 0)
+            for (int c = 0; c < static_cast<int>(m_owner.figure().constraints.size()); ++c) {
+                // The anchor copies' distance from the frames alone (jointError also measures limits, in double);
+                // a slider's anchors move apart along its axis by design, jointError measures it off the axis.
+                const figure::FigureConstraint& fc = m_owner.figure().constraints[static_cast<std::size_t>(c)];
+                double gap = 0;
+                if (fc.type == JointType::Spring) continue;
+                if (fc.type == JointType::Slider) gap = m_owner.jointError(c).anchorM;
+                else {
+                    const auto [frame1, frame2] = m_owner.constraintFramesWorld(c);
+                    gap = (frame1.getOrigin() - frame2.getOrigin()).length();
+                }
+                if (gap > guard.maxAnchorErrorM) return trip(GuardTrip::Cause::AnchorError, -1, c, gap);
+            }
+        return std::nullopt;
+    }
+    GuardTrip trip(GuardTrip::Cause cause, int body, int constraint, double value) const {
+        return GuardTrip{cause, body, constraint, value, activeTime};
+    }
+    void remember() {
+        const auto& bodies = m_owner.m_bodies;
+        good.resize(bodies.size());
+        for (std::size_t i = 0; i < bodies.size(); ++i) good[i] = bodies[i]->getCenterOfMassTransform();
+    }
+    // Back to the last good substep, frozen; nothing of the bad state stays where the solver would read it again:
+    // not the contacts' or joints' last impulses (warm starting), not the joint friction's feedback.
+    void restore(btCollisionWorld& world) {
+        auto& bodies = m_owner.m_bodies;
+        for (std::size_t i = 0; i < bodies.size() && i < good.size(); ++i) {
+            btRigidBody& b = *bodies[i];
+            b.setCenterOfMassTransform(good[i]);
+            b.setInterpolationWorldTransform(good[i]);
+            b.setInterpolationLinearVelocity(btVector3(0, 0, 0));
+            b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+            b.clearForces();
+            if (b.getBroadphaseHandle()) {
+                world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
+                                                                                      world.getDispatcher());
+                b.forceActivationState(ISLAND_SLEEPING); // an AABB overflow disabled it: updateSingleAabb skips those
+                world.updateSingleAabb(&b);
+            }
+        }
+        for (const auto& fb : m_owner.m_feedback) *fb = btJointFeedback();
+        for (const auto& c : m_owner.m_constraints) c->internalSetAppliedImpulse(0);
+        if (m_owner.m_manager) m_owner.m_manager->restartWarmStarting(m_owner);
+        m_owner.putToRest();
+    }
+    void report(const GuardTrip& t) {
+        ++trips;
+        lastTrip = t;
+        if (guard.onTrip) guard.onTrip(m_owner, t);
+    }
+
   private:
     Ragdoll& m_owner;
     bool m_comeToRest;
@@ -66,7 +165,7 @@ class Ragdoll::Action : public btActionInterface {
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
     : m_asset(std::move(asset)), m_world(world), m_method(options.method),
       m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
-      m_action(std::make_unique<Action>(*this, options.comeToRest)) {
+      m_action(std::make_unique<Action>(*this, options.comeToRest, options.guard, options.velocityClamp)) {
     if (m_method.backend == Backend::Multibody) {
         m_multibody = std::make_unique<detail::MultibodyRagdoll>(m_asset, world, options);
         for (std::size_t i = 0; i < figure().constraints.size(); ++i)
@@ -74,6 +173,7 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& wor
         return;
     }
     addBodies(options);
+    m_action->remember();
     addConstraints();
     filterPairs();
     m_world.addAction(m_action.get());
@@ -142,6 +242,7 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
         m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
                                                                                 m_world.getDispatcher());
     }
+    m_action->remember();
     wake();
     return true;
 }
@@ -225,6 +326,30 @@ void Ragdoll::thaw() {
 void Ragdoll::wake() {
     if (m_multibody) return m_multibody->wake();
     m_action->wake();
+}
+
+bool Ragdoll::checkGuard() {
+    if (!m_action->guard.enabled || m_action->atRest) return false;
+    const auto trip = m_action->check();
+    if (!trip) return false;
+    m_action->restore(m_world);
+    m_action->report(*trip);
+    return true;
+}
+
+void Ragdoll::freeze() { m_action->restore(m_world); }
+
+int Ragdoll::guardTrips() const { return m_action->trips; }
+
+const std::optional<GuardTrip>& Ragdoll::lastGuardTrip() const { return m_action->lastTrip; }
+
+std::string_view toString(GuardTrip::Cause cause) {
+    switch (cause) {
+    case GuardTrip::Cause::NonFinite: return "non-finite";
+    case GuardTrip::Cause::Speed: return "speed";
+    case GuardTrip::Cause::AnchorError: return "anchor-error";
+    }
+    return "?";
 }
 
 Ragdoll::~Ragdoll() {

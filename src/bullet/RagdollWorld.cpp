@@ -230,6 +230,7 @@ RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
 RagdollWorld::~RagdollWorld() { m_world.removeAction(m_action.get()); }
 
 void RagdollWorld::step(double dtSeconds) {
+    for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step
     const int substeps = std::max(1, m_method.substeps);
     m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
 }
@@ -239,6 +240,12 @@ void RagdollWorld::attach(Ragdoll& r) {
         for (int i = 0; i < r.bodyCount(); ++i)
             if (r.collisionObject(i).getUserIndex2() == kEngineFrictionMarker)
                 r.collisionObject(i).setUserIndex2(kSpeculativeFrictionMarker);
+    trackJoints(r);
+    m_ragdolls.push_back(&r);
+    rebuildOwners();
+}
+
+void RagdollWorld::trackJoints(Ragdoll& r) {
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
         solver != nullptr && (r.method().jointWarmStarting || r.method().directJoints))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
@@ -251,8 +258,12 @@ void RagdollWorld::attach(Ragdoll& r) {
                 continue;
             solver->track(c, r.method().jointWarmStarting, r.method().directJoints);
         }
-    m_ragdolls.push_back(&r);
-    rebuildOwners();
+}
+
+void RagdollWorld::restartWarmStarting(Ragdoll& r) {
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
+        for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+    trackJoints(r);
 }
 
 void RagdollWorld::detach(Ragdoll& r) {

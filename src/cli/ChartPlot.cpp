@@ -181,20 +181,20 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
     return {};
 }
 
-std::string runGnuplot(const std::filesystem::path& dir) {
+std::string runGnuplot(const std::filesystem::path& dir, const std::string& script) {
     const pid_t pid = ::fork();
     if (pid < 0) return "cannot start gnuplot";
     if (pid == 0) {
         if (::chdir(dir.c_str()) != 0) ::_exit(126);
-        ::execlp("gnuplot", "gnuplot", "front.gp", static_cast<char*>(nullptr));
+        ::execlp("gnuplot", "gnuplot", script.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
     int status = 0;
     if (::waitpid(pid, &status, 0) < 0) return "gnuplot: lost track of it";
     if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
-        return "gnuplot not found (install it: cmake/install-deps.sh); the script is " + (dir / "front.gp").string();
+        return "gnuplot not found (install it: cmake/install-deps.sh); the script is " + (dir / script).string();
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        return "gnuplot failed on " + (dir / "front.gp").string() + " (exit status " +
+        return "gnuplot failed on " + (dir / script).string() + " (exit status " +
                std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")";
     return {};
 }

@@ -15,8 +15,8 @@ namespace afb::cli {
 std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<sim::ChartPoint>& points,
                            const sim::ChartOptions& options, const std::string& subtitle);
 
-/// Runs `gnuplot front.gp` in `dir`. Returns an error message (gnuplot missing, or its exit status), or an empty
-/// string.
-std::string runGnuplot(const std::filesystem::path& dir);
+/// Runs `gnuplot SCRIPT` in `dir` (afb chart's front.gp, afb stress's stress.gp). Returns an error message
+/// (gnuplot missing, or its exit status), or an empty string.
+std::string runGnuplot(const std::filesystem::path& dir, const std::string& script = "front.gp");
 
 } // namespace afb::cli

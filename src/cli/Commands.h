@@ -23,6 +23,8 @@ void addInspectCommand(CLI::App& app, int& exitCode);
 void addDrawCommand(CLI::App& app, int& exitCode);
 /// Registers `afb chart`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
 void addChartCommand(CLI::App& app, int& exitCode, char** argv);
+/// Registers `afb stress`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
+void addStressCommand(CLI::App& app, int& exitCode, char** argv);
 
 /// Replaces this process by the sibling binary built against the other Bullet precision ("afb" for float,
 /// "afb-double" for double) with the same arguments: the two builds cannot share a process. Returns only when

@@ -68,8 +68,10 @@ void Builder::checkFigure() {
                                     ", outside [1, 100]: bodies that light or heavy make figures unstable");
         const double hi = b.inertiaKgM2.maxCoeff(), lo = b.inertiaKgM2.minCoeff();
         if (lo > 0 && hi / lo > 10.0)
-            warning(b.location, "body '" + b.name + "' has principal moments " + fmt(hi / lo) +
-                                    ":1 apart (more than 10:1): thin bodies spin unstably");
+            warning(b.location,
+                    "body '" + b.name + "' has principal moments " + fmt(hi / lo) +
+                        ":1 apart (more than 10:1): thin bodies spin unstably (figure::stabilizeMassProperties, "
+                        "opt-in, clamps it)");
     }
     for (const FigureConstraint& c : m_figure.constraints) {
         if (c.body2 < 0) continue;
@@ -77,9 +79,11 @@ void Builder::checkFigure() {
         const FigureBody& b = m_figure.bodies[static_cast<std::size_t>(c.body2)];
         const double ratio = std::max(a.massKg, b.massKg) / std::min(a.massKg, b.massKg);
         if (ratio > 10.0)
-            warning(c.location, std::string(toString(c.type)) + " '" + c.name + "' joins masses " + fmt(a.massKg) +
-                                    " and " + fmt(b.massKg) +
-                                    " (more than 10:1): the solver struggles with such ratios");
+            warning(c.location,
+                    std::string(toString(c.type)) + " '" + c.name + "' joins masses " + fmt(a.massKg) + " and " +
+                        fmt(b.massKg) +
+                        " (more than 10:1): the solver struggles with such ratios (figure::stabilizeMassProperties, "
+                        "opt-in, evens them out)");
     }
     // Self-colliding pairs that overlap or touch at the load pose fight their joints from the first step.
     const auto pairs = selfCollisionPairs(m_figure);

@@ -16,6 +16,7 @@
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
 
 namespace afb::sim {
 namespace {
@@ -49,16 +50,7 @@ struct Partial {
 // Kinetic + potential energy of a ragdoll, J, from its body states and the figure's mass properties.
 template <class Doll>
 double energy(const Doll& d, double g) {
-    double e = 0;
-    const std::vector<figure::BodyState> states = d.bodyStates();
-    for (std::size_t i = 0; i < states.size(); ++i) {
-        const figure::FigureBody& body = d.figure().bodies[i];
-        const figure::BodyState& s = states[i];
-        const Eigen::Vector3d wBody = s.pose.rotation.transpose() * s.angularVelocity;
-        e += 0.5 * body.massKg * s.linearVelocity.squaredNorm() +
-             0.5 * wBody.dot(body.inertiaKgM2.cwiseProduct(wBody)) + body.massKg * g * s.pose.position.z();
-    }
-    return e;
+    return figureEnergyJ(d.figure(), d.bodyStates(), g);
 }
 
 // The body's name if `o` is one of `dolls`' bodies.

@@ -91,6 +91,14 @@ afb_cli_test(chart_unknown_method 1 ARGS chart --base . chain --methods raw,nons
              MATCH "unknown method nonsense")
 afb_cli_test(chart_raw_technique 1 ARGS chart --base . chain --methods raw:position-iterations=2
              --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "raw \\(plain Bullet\\) has no position-iterations")
+# afb stress: a 2 × 2 matrix, its table, Markdown, JSON and heat map; bad names.
+add_test(NAME cli.stress_matrix
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DCHECK=$<TARGET_FILE:afb_picture_check>"
+          "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/stress_matrix" "-DGNUPLOT=${AFB_GNUPLOT}"
+          -P ${CMAKE_CURRENT_LIST_DIR}/stress.cmake)
+afb_cli_test(stress_unknown_scenario 1 ARGS stress --scenarios nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
+             MATCH "unknown scenario nonsense")
+afb_cli_test(stress_list 0 ARGS stress --list MATCH "humanoid-pile-160")
 afb_cli_test(drop_raw 0 ARGS drop --base . chain --seconds 1 --method raw MATCH "method raw \\(" "chain")
 afb_cli_test(drop_raw_technique 1 ARGS drop --base . chain --method raw --speculative-limits on
              MATCH "has no speculative-limits")

@@ -1,7 +1,11 @@
 #pragma once
 // A live ragdoll: a RagdollAsset's bodies and constraints in the caller's btDynamicsWorld.
+#include <functional>
 #include <memory>
+#include <optional>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
@@ -21,6 +25,47 @@ class MultibodyRagdoll;
 
 /// Restitution of every AF body (af-format §3.4: the engine's fixed value; it applies it above 2 units/s only).
 inline constexpr double kBodyRestitution = 0.4;
+
+class Ragdoll;
+
+/// What tripped a ragdoll's explosion guard.
+struct GuardTrip {
+    enum class Cause {
+        NonFinite,   ///< a body's pose or velocity became NaN or infinite
+        Speed,       ///< a body moved faster than ExplosionGuard::maxSpeedMps
+        AnchorError, ///< a constraint's anchors came further apart than ExplosionGuard::maxAnchorErrorM
+    };
+    Cause cause = Cause::NonFinite;
+    int body = -1;            ///< the body (Speed, NonFinite), or −1
+    int constraint = -1;      ///< the figure constraint (AnchorError), or −1
+    double value = 0;         ///< the speed (m/s) or the anchor error (m) that tripped it; 0 for NonFinite
+    double activeSeconds = 0; ///< Ragdoll::activeSeconds() when it tripped
+};
+/// "non-finite", "speed", "anchor-error".
+std::string_view toString(GuardTrip::Cause cause);
+
+/// The explosion guard: after every substep, a ragdoll whose state is non-finite or beyond these bounds is put back
+/// to its state after the last good substep and frozen (zero velocities, asleep, at rest until touched or woken;
+/// its contacts and warm-started impulses dropped), so a NaN never reaches the solver again and never another
+/// body of the world. Costs a pass over the bodies per substep (README: Stability).
+struct ExplosionGuard {
+    bool enabled = true;
+    double maxSpeedMps = 100.0; ///< a body faster than this trips the guard (≤ 0: speed not checked)
+    /// A constraint whose anchors are further apart than this trips it (≤ 0: not checked). A metre is a joint
+    /// torn open beyond any doubt; ragdolls recover from gaps of decimetres (plain Bullet at 10 m: 17 cm).
+    double maxAnchorErrorM = 1.0;
+    /// Called after the ragdoll was restored and frozen (from inside the world's step or RagdollWorld::step: do not
+    /// remove the ragdoll here; note it and remove it after the step).
+    std::function<void(Ragdoll&, const GuardTrip&)> onTrip;
+};
+
+/// Velocity clamps (opt-in): after every substep, a body's linear and angular speeds are scaled down to these
+/// bounds (0: no bound). A clamp caps what one bad solve can throw a body to; it also caps honest motion, so set it
+/// above anything the game needs (README: Stability).
+struct VelocityClamp {
+    double maxLinearMps = 0;
+    double maxAngularRadps = 0;
+};
 
 /// Where and how a ragdoll enters a world.
 struct SpawnOptions {
@@ -44,6 +89,10 @@ struct SpawnOptions {
     /// callback for it: it is in force while an EngineContactFriction guard (every RagdollWorld holds one) lives;
     /// Ragdoll::engineContactFriction() says whether it is.
     bool engineContactFriction = true;
+    /// The explosion guard (on by default).
+    ExplosionGuard guard = {};
+    /// Velocity clamps (off by default).
+    VelocityClamp velocityClamp = {};
 };
 
 /// Spawn options that carry what the loaded entity asks for: its "nodrop"/"sleep" flag as startAtRest, and
@@ -165,6 +214,18 @@ class Ragdoll {
     void putToRest();
     /// Wakes the figure and restarts its rest timers.
     void wake();
+    /// Runs the explosion guard's test now (if enabled) and, when it trips, restores, freezes and reports as after a
+    /// substep. RagdollWorld::step calls it before each frame, so a state the game wrote between steps (a NaN
+    /// through setBodyStates or a body's velocity) is caught before Bullet's collision detection or solver reads
+    /// it. Returns true when it tripped.
+    bool checkGuard();
+    /// Puts the ragdoll back to its state after the last substep the guard passed (or its spawn, or the last
+    /// setBodyStates) and freezes it there, as the guard does when it trips (without calling onTrip).
+    void freeze();
+    /// How many times the explosion guard has restored and frozen the ragdoll.
+    int guardTrips() const;
+    /// The last trip of the guard, if any.
+    const std::optional<GuardTrip>& lastGuardTrip() const;
 
   private:
     class Action;

@@ -48,7 +48,8 @@ class RagdollWorld {
     /// The method whose world-level knobs are in force.
     const Method& method() const { return m_method; }
 
-    /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep).
+    /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep), after the
+    /// explosion guard of every ragdoll checked what the game wrote since the last frame (Ragdoll::checkGuard).
     void step(double dtSeconds);
 
     /// Whether the engine's contact friction is in force (another contact callback may own Bullet's hook).
@@ -57,10 +58,13 @@ class RagdollWorld {
     /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
     void attach(Ragdoll& ragdoll);
     void detach(Ragdoll& ragdoll);
+    /// Forgets the ragdoll's warm-started joint impulses (its explosion guard restored it); not for callers.
+    void restartWarmStarting(Ragdoll& ragdoll);
 
   private:
     class PositionAction;
     void rebuildOwners();
+    void trackJoints(Ragdoll& ragdoll);
 
     btDiscreteDynamicsWorld& m_world;
     Method m_method;

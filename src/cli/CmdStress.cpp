@@ -1,0 +1,207 @@
+// afb stress: the scenario × method matrix of where ragdolls fail (sim/Stress.h), as a terminal table, stress.md,
+// stress.json and a heat map drawn by gnuplot.
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "ChartPlot.h"
+#include "Commands.h"
+#include "afb/figure/Load.h"
+#include "afb/sim/Stress.h"
+
+namespace afb::cli {
+namespace {
+
+std::string gpQuoted(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "\"";
+}
+
+// stress.dat (one row per cell: method column, scenario row, 0 pass / 0.5 skipped / 1 fail, label) and stress.gp,
+// which renders stress.png: green cells pass, red cells fail with the cause and time written in them.
+std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim::StressResult>& results,
+                         const std::vector<sim::StressMethod>& methods, const std::vector<std::string>& scenarios) {
+    std::ostringstream data, gp;
+    const int rows = static_cast<int>(scenarios.size()), cols = static_cast<int>(methods.size());
+    for (const sim::StressResult& r : results) {
+        int col = 0, row = 0;
+        for (int m = 0; m < cols; ++m)
+            if (methods[static_cast<std::size_t>(m)].label == r.method) col = m;
+        for (int s = 0; s < rows; ++s)
+            if (scenarios[static_cast<std::size_t>(s)] == r.scenario) row = rows - 1 - s; // first scenario on top
+        const double value = r.passed() ? 0.0 : r.cause == sim::StressCause::Skipped ? 0.5 : 1.0;
+        std::string label = r.passed() ? "ok" : std::string(sim::toString(r.cause));
+        if (r.failedAtS) {
+            char buf[32];
+            std::snprintf(buf, sizeof buf, " %.2fs", *r.failedAtS);
+            label += buf;
+        }
+        data << col << "\t" << row << "\t" << value << "\t" << gpQuoted(label) << "\n";
+    }
+    gp << "set terminal pngcairo size " << 260 + 130 * cols << "," << 120 + 30 * rows
+       << " font \"DejaVu Sans,10\" noenhanced\nset output \"stress.png\"\n"
+       << "set title \"afb stress: first failure per scenario and method (green: rests within the limits)\"\n"
+       << "unset colorbox\nset cbrange [0:1]\nset palette defined (0 \"#4daf4a\", 0.5 \"#cccccc\", 1 \"#e41a1c\")\n"
+       << "set xrange [-0.5:" << cols - 0.5 << "]\nset yrange [-0.5:" << rows - 0.5 << "]\nset x2tics (";
+    for (int m = 0; m < cols; ++m)
+        gp << (m ? ", " : "") << gpQuoted(methods[static_cast<std::size_t>(m)].label) << " " << m;
+    gp << ")\nset x2range [-0.5:" << cols - 0.5 << "]\nset ytics (";
+    for (int s = 0; s < rows; ++s)
+        gp << (s ? ", " : "") << gpQuoted(scenarios[static_cast<std::size_t>(s)]) << " " << rows - 1 - s;
+    gp << ")\nset tics scale 0\nunset xtics\nset lmargin 24\n"
+       << "plot \"stress.dat\" using 1:2:3 with image notitle, \"stress.dat\" using 1:2:4 with labels notitle\n"
+       << "set output\n";
+    std::ofstream dataFile(dir / "stress.dat");
+    dataFile << data.str();
+    std::ofstream scriptFile(dir / "stress.gp");
+    scriptFile << gp.str();
+    if (!dataFile || !scriptFile) return "cannot write " + (dir / "stress.gp").string();
+    return {};
+}
+
+} // namespace
+
+void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
+    auto* cmd = app.add_subcommand("stress", "Where methods fail: stress scenarios x methods, first failure per cell");
+    cmd->footer("Writes into --out: stress.md (thresholds, the matrix, every failure and the worst values), "
+                "stress.json (the same, with every knob), stress.png (gnuplot heat map; stress.gp and stress.dat "
+                "redraw it). Exit code 0 even when cells fail (1 on bad arguments).\n"
+                "Scenarios that use the bundled humanoid need --base (the repository root, or any content folder "
+                "with entity 'humanoid'); without it they are skipped.");
+    struct Options {
+        std::filesystem::path base = ".";
+        std::vector<std::string> methods = {"raw", "legacy", "fast", "default", "accurate", "exact"};
+        std::vector<std::string> scenarios;
+        std::filesystem::path out = "stress";
+        int threads = 2;
+        std::string precision;
+        bool list = false, ci = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("--base", opt->base, "Content folder with the humanoid (af/, def/, models/)")
+        ->capture_default_str();
+    cmd->add_option("--methods", opt->methods,
+                    "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--scenarios", opt->scenarios, "Scenarios, comma-separated (default: all; --list names them)")
+        ->delimiter(',');
+    cmd->add_flag("--ci", opt->ci, "Only the scenarios CI runs as unit tests");
+    cmd->add_flag("--list", opt->list, "List the scenarios and exit");
+    cmd->add_option("--out", opt->out, "Output folder (created)")->capture_default_str();
+    cmd->add_option("--threads", opt->threads, "Worker threads (each run owns its world)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
+        ->check(CLI::IsMember({"float", "double"}));
+    cmd->callback([opt, &exitCode, argv] {
+        if (opt->list) {
+            for (const sim::StressScenario& s : sim::stressScenarios())
+                std::printf("%-26s %s\n", s.name.c_str(), s.description.c_str());
+            return;
+        }
+        if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
+            execOtherPrecision(opt->precision, argv, "afb stress");
+            exitCode = 1;
+            return;
+        }
+        std::vector<sim::StressMethod> methods;
+        for (const std::string& spec : opt->methods) {
+            std::string error;
+            auto m = sim::parseStressMethod(spec, error);
+            if (!m) {
+                std::cerr << "afb stress: " << error << "\n";
+                exitCode = 1;
+                return;
+            }
+            for (const sim::StressMethod& other : methods)
+                if (other.label == m->label) {
+                    std::cerr << "afb stress: method " << spec << " is listed twice\n";
+                    exitCode = 1;
+                    return;
+                }
+            methods.push_back(std::move(*m));
+        }
+        std::vector<const sim::StressScenario*> scenarios;
+        std::vector<std::string> names = opt->scenarios;
+        if (opt->ci)
+            for (std::string_view n : sim::stressCiScenarios()) names.emplace_back(n);
+        if (names.empty())
+            for (const sim::StressScenario& s : sim::stressScenarios()) names.push_back(s.name);
+        for (const std::string& n : names) {
+            const sim::StressScenario* s = sim::findStressScenario(n);
+            if (!s) {
+                std::cerr << "afb stress: unknown scenario " << n << " (afb stress --list names them)\n";
+                exitCode = 1;
+                return;
+            }
+            if (std::find(scenarios.begin(), scenarios.end(), s) == scenarios.end()) scenarios.push_back(s);
+        }
+        if (methods.empty() || scenarios.empty()) {
+            std::cerr << "afb stress: no methods or no scenarios\n";
+            exitCode = 1;
+            return;
+        }
+
+        sim::StressContent content;
+        bool needsHumanoid = false;
+        for (const sim::StressScenario* s : scenarios) needsHumanoid = needsHumanoid || s->needsHumanoid;
+        if (needsHumanoid) {
+            text::Diagnostics diags;
+            if (auto lib = decl::Library::open(opt->base, diags))
+                if (auto loaded = figure::loadEntityFigure(*lib, "humanoid", {}, diags))
+                    content.humanoid = std::move(loaded->figure);
+            if (!content.humanoid) {
+                printDiagnostics(diags);
+                std::cerr << "afb stress: warning: no humanoid in " << opt->base.string()
+                          << ": its scenarios are skipped (--base)\n";
+            }
+        }
+        std::error_code ec;
+        std::filesystem::create_directories(opt->out, ec);
+        if (ec) {
+            std::cerr << "afb stress: cannot create " << opt->out.string() << ": " << ec.message() << "\n";
+            exitCode = 1;
+            return;
+        }
+        std::printf("afb stress: Bullet %s (%s), %zu scenarios x %zu methods on %d threads into %s\n",
+                    sim::bulletVersion().c_str(), sim::bulletPrecision(), scenarios.size(), methods.size(),
+                    opt->threads, opt->out.string().c_str());
+        std::fflush(stdout);
+        const bool tty = ::isatty(STDERR_FILENO) != 0;
+        const sim::StressThresholds thresholds;
+        const std::vector<sim::StressResult> results =
+            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, [&](int done, int total) {
+                if (!tty) return;
+                std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
+                std::fflush(stderr);
+            });
+        std::ofstream(opt->out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
+        std::ofstream(opt->out / "stress.json") << sim::stressJson(results, methods, thresholds);
+        std::vector<std::string> scenarioNames;
+        for (const sim::StressScenario* s : scenarios) scenarioNames.push_back(s->name);
+        std::string plotError = writeHeatMap(opt->out, results, methods, scenarioNames);
+        if (plotError.empty()) plotError = runGnuplot(opt->out, "stress.gp");
+        std::printf("\n%s", sim::stressTable(results, methods).c_str());
+        int failed = 0;
+        for (const sim::StressResult& r : results)
+            if (!r.passed() && r.cause != sim::StressCause::Skipped) {
+                ++failed;
+                std::printf("  %s / %s: %s at %.3f s: %s\n", r.scenario.c_str(), r.method.c_str(),
+                            std::string(sim::toString(r.cause)).c_str(), r.failedAtS.value_or(0), r.detail.c_str());
+            }
+        std::printf("%d of %zu cells failed\n", failed, results.size());
+        if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
+        std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", opt->out.string().c_str(),
+                    plotError.empty() ? ",stress.png" : "");
+    });
+}
+
+} // namespace afb::cli

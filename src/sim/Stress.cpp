@@ -1,0 +1,553 @@
+// Stress runs (Stress.h): one scenario with one method, judged step by step against the failure thresholds; the
+// matrix over worker threads; its table, Markdown and JSON.
+#include "afb/sim/Stress.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <time.h>
+
+#include "afb/bullet/Convert.h"
+#include "afb/figure/Stabilize.h"
+#include "afb/sim/Drop.h"
+#include "afb/sim/RawRagdoll.h"
+#include "afb/sim/Scene.h"
+
+namespace afb::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string fixed(double v, int digits) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+    return buf;
+}
+
+// The run's state while it steps: the worst values, the first failure, the rest window.
+struct Judge {
+    const StressThresholds& th;
+    StressResult& r;
+    double now = 0;
+    bool failed() const { return r.cause != StressCause::None; }
+    void fail(StressCause cause, std::string detail) {
+        if (failed()) return;
+        r.cause = cause;
+        r.failedAtS = now;
+        r.detail = std::move(detail);
+    }
+};
+
+// "instance 3 / l2" or "l2" for a single instance: which body of which instance.
+template <class Doll>
+std::string bodyLabel(const std::vector<std::unique_ptr<Doll>>& dolls, std::size_t k, int body) {
+    const std::string& name = dolls[k]->figure().bodies[static_cast<std::size_t>(body)].name;
+    return dolls.size() > 1 ? "#" + std::to_string(k) + " " + name : name;
+}
+
+template <class Doll>
+std::string objectLabel(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, const btCollisionObject* o) {
+    if (o == scene.ground()) return "ground";
+    for (std::size_t k = 0; k < dolls.size(); ++k)
+        for (int i = 0; i < dolls[k]->bodyCount(); ++i)
+            if (&dolls[k]->body(i) == o) return bodyLabel(dolls, k, i);
+    return "other";
+}
+
+template <class Doll>
+double totalEnergy(const std::vector<std::unique_ptr<Doll>>& dolls, double g) {
+    double e = 0;
+    for (const auto& d : dolls) e += figureEnergyJ(d->figure(), d->bodyStates(), g);
+    return e;
+}
+
+// Sets every body of an instance to one rigid motion: `v` at the instance's centre of mass and spin `w` about it.
+template <class Doll>
+void setRigidMotion(Doll& d, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+    double mass = 0;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int i = 0; i < d.bodyCount(); ++i) {
+        const double m = d.figure().bodies[static_cast<std::size_t>(i)].massKg;
+        mass += m;
+        centre += m * bullet::toEigen(d.body(i).getCenterOfMassPosition());
+    }
+    centre /= mass;
+    for (int i = 0; i < d.bodyCount(); ++i) {
+        btRigidBody& b = d.body(i);
+        const Eigen::Vector3d r = bullet::toEigen(b.getCenterOfMassPosition()) - centre;
+        b.setLinearVelocity(bullet::toBt(Eigen::Vector3d(v + w.cross(r))));
+        b.setAngularVelocity(bullet::toBt(w));
+        b.activate(true);
+    }
+}
+
+// Potential energy the ground adds when it lifts an instance that spawned inside it out as a whole (work of the
+// world, not a gain): the instance's mass times g times its deepest point's depth.
+template <class Doll>
+double groundAllowanceJ(const std::vector<std::unique_ptr<Doll>>& dolls, double g) {
+    double allowance = 0;
+    for (const auto& d : dolls) {
+        double lowest = 0, mass = 0;
+        for (int i = 0; i < d->bodyCount(); ++i) {
+            const figure::FigureBody& body = d->figure().bodies[static_cast<std::size_t>(i)];
+            const btTransform t = d->body(i).getCenterOfMassTransform();
+            mass += body.massKg;
+            for (const Eigen::Vector3d& v : body.shape.vertices)
+                lowest = std::min(lowest, static_cast<double>((t * bullet::toBt(v)).z()));
+        }
+        allowance += mass * g * -lowest;
+    }
+    return allowance;
+}
+
+// The rest window: every body's frame at its start.
+template <class Doll>
+std::vector<btTransform> framesOf(const std::vector<std::unique_ptr<Doll>>& dolls) {
+    std::vector<btTransform> out;
+    for (const auto& d : dolls)
+        for (int i = 0; i < d->bodyCount(); ++i) out.push_back(d->body(i).getCenterOfMassTransform());
+    return out;
+}
+
+// True when no body moved more than the rest bounds since `window`.
+template <class Doll>
+bool stillSince(const std::vector<std::unique_ptr<Doll>>& dolls, const std::vector<btTransform>& window,
+                const StressThresholds& th) {
+    std::size_t n = 0;
+    const double turn = th.restTurnDeg * kPi / 180;
+    for (const auto& d : dolls)
+        for (int i = 0; i < d->bodyCount(); ++i, ++n) {
+            const btTransform& now = d->body(i).getCenterOfMassTransform();
+            if ((now.getOrigin() - window[n].getOrigin()).length() > th.restMoveM) return false;
+            const btQuaternion dq = window[n].getRotation().inverse() * now.getRotation();
+            if (static_cast<double>(dq.getAngle()) > turn && 2 * kPi - static_cast<double>(dq.getAngle()) > turn)
+                return false;
+        }
+    return true;
+}
+
+// A trip of a ragdoll's explosion guard (bullet::ExplosionGuard), as the run's failure: the guard restores and
+// freezes the ragdoll, so the state after the step would otherwise look healthy.
+struct GuardReport {
+    std::optional<StressCause> cause;
+    std::string detail;
+};
+
+template <class Doll>
+void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, const StressSetup& setup,
+              const StressThresholds& th, StressResult& r, const GuardReport& guard) {
+    const double g = setup.figures.front().units.gravityMps2;
+    for (std::size_t k = 0; k < dolls.size(); ++k)
+        setRigidMotion(*dolls[k], setup.spawns[k].linearVelocity, setup.spawns[k].angularVelocity);
+    double e0 = totalEnergy(dolls, g) + groundAllowanceJ(dolls, g);
+    double externalWork = 0;
+    bool impulseDone = !setup.impulse;
+    const double dt = 1.0 / setup.hz;
+    const int steps = static_cast<int>(std::ceil(th.restWithinS * setup.hz - 1e-9));
+    const int lastSecondFrom = steps - static_cast<int>(std::lround(setup.hz));
+    double restStart = 0, lastSecondSpin = 0, windowSpin = 0;
+    std::string windowSpinBody;
+    std::vector<btTransform> window = framesOf(dolls);
+    std::string lastSecondSpinBody;
+    Judge judge{th, r};
+    for (int step = 0; step < steps && !judge.failed(); ++step) {
+        timespec t0{}, t1{};
+        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+        scene.step(dt);
+        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+        r.cpuMs +=
+            (static_cast<double>(t1.tv_sec - t0.tv_sec) + static_cast<double>(t1.tv_nsec - t0.tv_nsec) * 1e-9) * 1000.0;
+        judge.now = r.simulatedS = (step + 1) * dt;
+        if (!impulseDone && judge.now >= setup.impulse->atS - 1e-9) {
+            const double eBefore = totalEnergy(dolls, g);
+            btRigidBody& b = dolls[setup.impulse->instance]->body(setup.impulse->body);
+            b.activate(true);
+            b.applyCentralImpulse(bullet::toBt(setup.impulse->impulseNs));
+            externalWork += totalEnergy(dolls, g) - eBefore;
+            impulseDone = true;
+        }
+        if (guard.cause) {
+            judge.fail(*guard.cause, guard.detail);
+            break;
+        }
+        const bool checkPenetration = judge.now > th.penetrationAfterS + 1e-9;
+        for (std::size_t k = 0; k < dolls.size() && !judge.failed(); ++k) {
+            const Doll& d = *dolls[k];
+            const std::vector<figure::BodyState> states = d.bodyStates();
+            for (std::size_t i = 0; i < states.size(); ++i) {
+                const figure::BodyState& s = states[i];
+                const int body = static_cast<int>(i);
+                if (!(s.pose.position.allFinite() && s.pose.rotation.allFinite() && s.linearVelocity.allFinite() &&
+                      s.angularVelocity.allFinite())) {
+                    judge.fail(StressCause::NonFinite, bodyLabel(dolls, k, body) + " not finite");
+                    break;
+                }
+                const double speed = s.linearVelocity.norm(), spin = s.angularVelocity.norm();
+                r.maxSpeedMps = std::max(r.maxSpeedMps, speed);
+                if (speed > th.maxSpeedMps)
+                    judge.fail(StressCause::Speed, bodyLabel(dolls, k, body) + " at " + fixed(speed, 1) + " m/s");
+                const double under = -s.pose.position.z();
+                if (checkPenetration && under > th.maxPenetrationM) {
+                    r.maxPenetrationM = std::max(r.maxPenetrationM, under);
+                    judge.fail(StressCause::Penetration,
+                               bodyLabel(dolls, k, body) + " centre " + fixed(under * 100, 1) + " cm under the ground");
+                }
+                if (step >= lastSecondFrom && spin > lastSecondSpin) {
+                    lastSecondSpin = spin;
+                    lastSecondSpinBody = bodyLabel(dolls, k, body);
+                }
+                if (spin > windowSpin) {
+                    windowSpin = spin;
+                    windowSpinBody = bodyLabel(dolls, k, body);
+                }
+            }
+            for (int c = 0; c < static_cast<int>(d.figure().constraints.size()) && !judge.failed(); ++c) {
+                const bullet::JointError e = d.jointError(c);
+                const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
+                const std::string label = dolls.size() > 1 ? "#" + std::to_string(k) + " " + name : name;
+                const double limitDeg = e.limitExcessRad * 180.0 / kPi;
+                r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, e.anchorM);
+                r.maxLimitOvershootDeg = std::max(r.maxLimitOvershootDeg, limitDeg);
+                if (e.anchorM > th.maxAnchorErrorM)
+                    judge.fail(StressCause::Anchor, label + " anchors " + fixed(e.anchorM * 1000, 0) + " mm apart");
+                else if (limitDeg > th.maxLimitOvershootDeg)
+                    judge.fail(StressCause::Limit, label + " " + fixed(limitDeg, 0) + "° past its limit");
+            }
+        }
+        if (judge.failed()) break;
+        if (checkPenetration) {
+            const ContactDepth deepest = scene.deepestContact();
+            r.maxPenetrationM = std::max(r.maxPenetrationM, deepest.depthM);
+            if (deepest.depthM > th.maxPenetrationM)
+                judge.fail(StressCause::Penetration, objectLabel(scene, dolls, deepest.a) + " / " +
+                                                         objectLabel(scene, dolls, deepest.b) + " " +
+                                                         fixed(deepest.depthM * 100, 1) + " cm deep");
+        }
+        const double energy = totalEnergy(dolls, g);
+        if (judge.now <= setup.spawnGraceS + 1e-9) e0 = std::max(e0, energy);
+        const double gain = energy - e0 - externalWork;
+        r.maxEnergyGainJ = std::max(r.maxEnergyGainJ, gain);
+        if (gain > th.maxEnergyGainJ) judge.fail(StressCause::EnergyGain, "+" + fixed(gain, 1) + " J");
+        if (judge.failed()) break;
+        // Rest: a window of restWindowS over which nothing moved; a body that moved starts a new one now.
+        if (!impulseDone || !stillSince(dolls, window, th)) {
+            restStart = judge.now;
+            window = framesOf(dolls);
+            windowSpin = 0;
+        } else if (judge.now - restStart >= th.restWindowS - 1e-9) {
+            // Still, but are the velocities? A body held in place while it reports a spin is jitter.
+            if (windowSpin > th.maxResidualSpinRadps)
+                judge.fail(StressCause::Jitter,
+                           windowSpinBody + " turning at " + fixed(windowSpin, 1) + " rad/s while at rest");
+            else r.restAtS = restStart;
+            return;
+        }
+    }
+    if (judge.failed()) return;
+    if (lastSecondSpin > th.maxResidualSpinRadps)
+        judge.fail(StressCause::Jitter,
+                   lastSecondSpinBody + " turning at " + fixed(lastSecondSpin, 1) + " rad/s in the last second");
+    else judge.fail(StressCause::NoRest, "still moving after " + fixed(th.restWithinS, 0) + " s");
+}
+
+} // namespace
+
+std::string_view toString(StressCause cause) {
+    switch (cause) {
+    case StressCause::None: return "pass";
+    case StressCause::NonFinite: return "nan";
+    case StressCause::Speed: return "speed";
+    case StressCause::Anchor: return "anchor";
+    case StressCause::Limit: return "limit";
+    case StressCause::Penetration: return "penetration";
+    case StressCause::Jitter: return "jitter";
+    case StressCause::EnergyGain: return "energy";
+    case StressCause::NoRest: return "no-rest";
+    case StressCause::Skipped: return "skipped";
+    }
+    return "?";
+}
+
+double figureEnergyJ(const figure::Figure& figure, const std::vector<figure::BodyState>& states, double g) {
+    double e = 0;
+    for (std::size_t i = 0; i < states.size() && i < figure.bodies.size(); ++i) {
+        const figure::FigureBody& body = figure.bodies[i];
+        const figure::BodyState& s = states[i];
+        const Eigen::Vector3d wBody = s.pose.rotation.transpose() * s.angularVelocity;
+        e += 0.5 * body.massKg * s.linearVelocity.squaredNorm() +
+             0.5 * wBody.dot(body.inertiaKgM2.cwiseProduct(wBody)) + body.massKg * g * s.pose.position.z();
+    }
+    return e;
+}
+
+std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string& error) {
+    const std::size_t plus = spec.find('+');
+    auto base = parseChartMethod(spec.substr(0, plus), error);
+    if (!base) return std::nullopt;
+    StressMethod m;
+    static_cast<ChartMethod&>(m) = std::move(*base);
+    m.label = std::string(spec);
+    std::string_view rest = plus == std::string_view::npos ? std::string_view() : spec.substr(plus + 1);
+    while (plus != std::string_view::npos) {
+        const std::size_t next = rest.find('+');
+        const std::string_view item = rest.substr(0, next);
+        if (item == "stabilize") m.stabilize = true;
+        else if (item == "clamp") m.clamp = {kStressClampLinearMps, kStressClampAngularRadps};
+        else {
+            error = "method " + std::string(spec) + ": unknown mitigation '+" + std::string(item) +
+                    "' (+stabilize, +clamp)";
+            return std::nullopt;
+        }
+        if (next == std::string_view::npos) break;
+        rest = rest.substr(next + 1);
+    }
+    if (isRaw(m.method) && (m.stabilize || m.clamp.maxLinearMps > 0)) {
+        error = "method " + std::string(spec) + ": raw (plain Bullet) takes no mitigations";
+        return std::nullopt;
+    }
+    return m;
+}
+
+StressResult runStress(const StressSetup& setup, const StressMethod& method, const StressThresholds& thresholds) {
+    StressResult r;
+    r.method = method.label;
+    if (setup.figures.empty() || setup.spawns.empty()) return r;
+    std::vector<std::shared_ptr<const bullet::RagdollAsset>> assets;
+    for (const figure::Figure& f : setup.figures)
+        assets.push_back(
+            bullet::RagdollAsset::create(method.stabilize ? figure::stabilizeMassProperties(f) : figure::Figure(f)));
+    Scene scene(method.method, SceneSettings{setup.figures.front().units.gravityMps2, true, 1.0});
+    GuardReport guard;
+    for (const StressSpawn& s : setup.spawns) {
+        bullet::SpawnOptions so;
+        so.guard.onTrip = [&guard](bullet::Ragdoll& doll, const bullet::GuardTrip& t) {
+            if (guard.cause) return;
+            using Cause = bullet::GuardTrip::Cause;
+            guard.cause = t.cause == Cause::NonFinite ? StressCause::NonFinite
+                          : t.cause == Cause::Speed   ? StressCause::Speed
+                                                      : StressCause::Anchor;
+            const figure::Figure& f = doll.figure();
+            const std::string what = t.body >= 0 ? f.bodies[static_cast<std::size_t>(t.body)].name
+                                                 : f.constraints[static_cast<std::size_t>(t.constraint)].name;
+            guard.detail = "explosion guard froze " + f.name + " (" + std::string(bullet::toString(t.cause)) + " at " +
+                           what + (t.value > 0 ? ", " + fixed(t.value, 2) : std::string()) + ")";
+        };
+        so.entityTransform = bullet::toBt(s.entity);
+        // The rest rules would put a jittering figure to sleep (or stop it after maxMoveTime): the stress judges
+        // the method's own physics, so rest is measured (StressThresholds), never imposed.
+        so.comeToRest = false;
+        so.velocityClamp = method.clamp;
+        const auto& asset = assets[s.figure];
+        r.bodies += static_cast<int>(asset->figure().bodies.size());
+        if (isRaw(method.method)) scene.spawnRaw(asset, so);
+        else scene.spawn(asset, so);
+    }
+    if (isRaw(method.method)) runSteps(scene, scene.rawRagdolls(), setup, thresholds, r, guard);
+    else runSteps(scene, scene.ragdolls(), setup, thresholds, r, guard);
+    return r;
+}
+
+std::vector<StressResult> runStressMatrix(const std::vector<const StressScenario*>& scenarios,
+                                          const std::vector<StressMethod>& methods, const StressContent& content,
+                                          const StressThresholds& thresholds, int threads,
+                                          const std::function<void(int done, int total)>& progress) {
+    std::vector<std::optional<StressSetup>> setups;
+    for (const StressScenario* s : scenarios) setups.push_back(s->build(content));
+    const std::size_t total = scenarios.size() * methods.size();
+    std::vector<StressResult> results(total);
+    std::atomic<std::size_t> next{0};
+    std::atomic<int> done{0};
+    auto work = [&] {
+        for (std::size_t i = next++; i < total; i = next++) {
+            const std::size_t s = i / methods.size(), m = i % methods.size();
+            StressResult r;
+            if (setups[s]) r = runStress(*setups[s], methods[m], thresholds);
+            else {
+                r.method = methods[m].label;
+                r.cause = StressCause::Skipped;
+                r.detail = "needs the bundled humanoid (--base)";
+            }
+            r.scenario = scenarios[s]->name;
+            results[i] = std::move(r);
+            ++done;
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
+    if (progress) {
+        std::thread self(work);
+        int last = -1;
+        while (done < static_cast<int>(total)) {
+            if (done != last) progress(last = done, static_cast<int>(total));
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        }
+        self.join();
+        progress(static_cast<int>(total), static_cast<int>(total));
+    } else {
+        work();
+    }
+    for (std::thread& t : pool) t.join();
+    return results;
+}
+
+namespace {
+
+// A cell: "ok" or "cause t s" (skipped runs "-").
+std::string cellText(const StressResult& r) {
+    if (r.passed()) return "ok";
+    if (r.cause == StressCause::Skipped) return "-";
+    return std::string(toString(r.cause)) + " " + (r.failedAtS ? fixed(*r.failedAtS, 2) + "s" : "");
+}
+
+std::vector<std::string> scenarioOrder(const std::vector<StressResult>& results) {
+    std::vector<std::string> names;
+    for (const StressResult& r : results)
+        if (std::find(names.begin(), names.end(), r.scenario) == names.end()) names.push_back(r.scenario);
+    return names;
+}
+
+const StressResult* cell(const std::vector<StressResult>& results, const std::string& scenario,
+                         const std::string& method) {
+    for (const StressResult& r : results)
+        if (r.scenario == scenario && r.method == method) return &r;
+    return nullptr;
+}
+
+} // namespace
+
+std::string stressTable(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods) {
+    const std::vector<std::string> scenarios = scenarioOrder(results);
+    std::size_t first = 8;
+    for (const std::string& s : scenarios) first = std::max(first, s.size());
+    std::vector<std::size_t> widths;
+    for (const StressMethod& m : methods) {
+        std::size_t w = std::max<std::size_t>(m.label.size(), 4);
+        for (const StressResult& r : results)
+            if (r.method == m.label) w = std::max(w, cellText(r).size());
+        widths.push_back(w);
+    }
+    auto pad = [](std::string s, std::size_t w) {
+        s.resize(std::max(s.size(), w), ' ');
+        return s;
+    };
+    std::string out = pad("scenario", first);
+    for (std::size_t m = 0; m < methods.size(); ++m) out += "  " + pad(methods[m].label, widths[m]);
+    out += "\n";
+    for (const std::string& s : scenarios) {
+        out += pad(s, first);
+        for (std::size_t m = 0; m < methods.size(); ++m) {
+            const StressResult* r = cell(results, s, methods[m].label);
+            out += "  " + pad(r ? cellText(*r) : "", widths[m]);
+        }
+        out += "\n";
+    }
+    return out;
+}
+
+std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
+                           const StressThresholds& th) {
+    std::string out =
+        "# afb stress\n\nBullet " + bulletVersion() + " (" + bulletPrecision() +
+        "). A cell passes when the run comes to rest (no body moves more than " + fixed(th.restMoveM * 1000, 0) +
+        " mm nor turns more than " + fixed(th.restTurnDeg, 0) + "° over " + fixed(th.restWindowS, 1) +
+        " s, and none reports a spin over " + fixed(th.maxResidualSpinRadps, 0) + " rad/s meanwhile) within " +
+        fixed(th.restWithinS, 0) +
+        " s without a failure; otherwise it shows the first failure and its time. Failures: nan "
+        "(non-finite state), speed (over " +
+        fixed(th.maxSpeedMps, 0) + " m/s), anchor (over " + fixed(th.maxAnchorErrorM * 1000, 0) + " mm), limit (over " +
+        fixed(th.maxLimitOvershootDeg, 0) + "°), penetration (over " + fixed(th.maxPenetrationM * 100, 0) +
+        " cm after " + fixed(th.penetrationAfterS, 0) + " s), energy (a gain over " + fixed(th.maxEnergyGainJ, 0) +
+        " J beyond external work), jitter (a body reporting over " + fixed(th.maxResidualSpinRadps, 0) +
+        " rad/s in the rest window, or in the last second of a run that never rests), no-rest.\n\n| scenario |";
+    for (const StressMethod& m : methods) out += " `" + m.label + "` |";
+    out += "\n|---|";
+    for (std::size_t m = 0; m < methods.size(); ++m) out += "---|";
+    out += "\n";
+    const std::vector<std::string> scenarios = scenarioOrder(results);
+    for (const std::string& s : scenarios) {
+        out += "| " + s + " |";
+        for (const StressMethod& m : methods) {
+            const StressResult* r = cell(results, s, m.label);
+            if (!r) out += " |";
+            else if (r->passed()) out += " ok (rest " + fixed(r->restAtS.value_or(0), 1) + " s) |";
+            else out += " **" + cellText(*r) + "** |";
+        }
+        out += "\n";
+    }
+    out += "\n## Scenarios\n\n";
+    for (const std::string& s : scenarios)
+        if (const StressScenario* sc = findStressScenario(s)) out += "- `" + s + "`: " + sc->description + "\n";
+    out += "\n## Failures\n\n| scenario | method | cause | at | what |\n|---|---|---|---|---|\n";
+    for (const StressResult& r : results)
+        if (!r.passed() && r.cause != StressCause::Skipped)
+            out += "| " + r.scenario + " | `" + r.method + "` | " + std::string(toString(r.cause)) + " | " +
+                   (r.failedAtS ? fixed(*r.failedAtS, 3) + " s" : "") + " | " + r.detail + " |\n";
+    out += "\n## Worst values (up to the first failure)\n\n| scenario | method | speed m/s | anchor mm | limit ° | "
+           "penetration mm | energy gain J | rest at s | CPU ms |\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const StressResult& r : results)
+        if (r.cause != StressCause::Skipped)
+            out += "| " + r.scenario + " | `" + r.method + "` | " + fixed(r.maxSpeedMps, 1) + " | " +
+                   fixed(r.maxAnchorErrorM * 1000, 1) + " | " + fixed(r.maxLimitOvershootDeg, 1) + " | " +
+                   fixed(r.maxPenetrationM * 1000, 1) + " | " + fixed(r.maxEnergyGainJ, 2) + " | " +
+                   (r.restAtS ? fixed(*r.restAtS, 2) : "-") + " | " + fixed(r.cpuMs, 0) + " |\n";
+    return out;
+}
+
+std::string stressJson(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
+                       const StressThresholds& th) {
+    nlohmann::ordered_json j;
+    j["bullet"] = bulletVersion();
+    j["precision"] = bulletPrecision();
+    j["thresholds"] = {{"max_speed_mps", th.maxSpeedMps},
+                       {"max_anchor_error_m", th.maxAnchorErrorM},
+                       {"max_limit_overshoot_deg", th.maxLimitOvershootDeg},
+                       {"max_penetration_m", th.maxPenetrationM},
+                       {"penetration_after_s", th.penetrationAfterS},
+                       {"max_residual_spin_radps", th.maxResidualSpinRadps},
+                       {"max_energy_gain_j", th.maxEnergyGainJ},
+                       {"rest_within_s", th.restWithinS},
+                       {"rest_move_m", th.restMoveM},
+                       {"rest_turn_deg", th.restTurnDeg},
+                       {"rest_window_s", th.restWindowS}};
+    nlohmann::ordered_json ms = nlohmann::ordered_json::array();
+    for (const StressMethod& m : methods) {
+        nlohmann::ordered_json knobs;
+        for (const bullet::MethodKnob& k : bullet::methodKnobs()) knobs[std::string(k.name)] = knobValue(m.method, k);
+        ms.push_back({{"label", m.label},
+                      {"name", m.method.name},
+                      {"knobs", knobs},
+                      {"stabilize", m.stabilize},
+                      {"clamp_linear_mps", m.clamp.maxLinearMps},
+                      {"clamp_angular_radps", m.clamp.maxAngularRadps}});
+    }
+    j["methods"] = ms;
+    nlohmann::ordered_json cells = nlohmann::ordered_json::array();
+    for (const StressResult& r : results) {
+        nlohmann::ordered_json c = {{"scenario", r.scenario},
+                                    {"method", r.method},
+                                    {"passed", r.passed()},
+                                    {"cause", std::string(toString(r.cause))},
+                                    {"failed_at_s", r.failedAtS ? nlohmann::ordered_json(*r.failedAtS) : nullptr},
+                                    {"detail", r.detail},
+                                    {"simulated_s", r.simulatedS},
+                                    {"rest_at_s", r.restAtS ? nlohmann::ordered_json(*r.restAtS) : nullptr},
+                                    {"bodies", r.bodies},
+                                    {"max_speed_mps", r.maxSpeedMps},
+                                    {"max_anchor_error_m", r.maxAnchorErrorM},
+                                    {"max_limit_overshoot_deg", r.maxLimitOvershootDeg},
+                                    {"max_penetration_m", r.maxPenetrationM},
+                                    {"max_energy_gain_j", r.maxEnergyGainJ},
+                                    {"cpu_ms", r.cpuMs}};
+        cells.push_back(c);
+    }
+    j["cells"] = cells;
+    return j.dump(2) + "\n";
+}
+
+} // namespace afb::sim

@@ -1,0 +1,316 @@
+// The stress matrix (sim/Stress.h): the failure detector on cases with known answers, the CI subset of the matrix
+// with the default method, and the explosion guard (bullet::ExplosionGuard) against an injected NaN.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "EntityFixture.h"
+#include "afb/bullet/Convert.h"
+#include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
+
+using namespace afb;
+
+namespace {
+
+sim::StressContent bundled() {
+    sim::StressContent c;
+    c.humanoid = test::loadEntity("humanoid").figure;
+    return c;
+}
+
+sim::StressMethod method(const char* spec) {
+    std::string error;
+    auto m = sim::parseStressMethod(spec, error);
+    INFO(error);
+    REQUIRE(m);
+    return *m;
+}
+
+sim::StressSetup setupOf(const char* scenario, const sim::StressContent& content = {}) {
+    const sim::StressScenario* s = sim::findStressScenario(scenario);
+    REQUIRE(s != nullptr);
+    auto setup = s->build(content);
+    REQUIRE(setup);
+    return std::move(*setup);
+}
+
+} // namespace
+
+TEST_CASE("stress: every scenario builds, names are unique, the CI subset exists", "[sim][stress]") {
+    const sim::StressContent content = bundled();
+    std::vector<std::string> names;
+    for (const sim::StressScenario& s : sim::stressScenarios()) {
+        INFO(s.name);
+        CHECK(std::find(names.begin(), names.end(), s.name) == names.end());
+        names.push_back(s.name);
+        const auto setup = s.build(content);
+        REQUIRE(setup);
+        CHECK_FALSE(setup->spawns.empty());
+        CHECK(s.build({}).has_value() == !s.needsHumanoid); // humanoid scenarios are skipped without it
+    }
+    CHECK(names.size() == 18);
+    for (std::string_view n : sim::stressCiScenarios()) CHECK(sim::findStressScenario(n) != nullptr);
+    // The pile is 160 humanoids.
+    CHECK(setupOf("humanoid-pile-160", content).spawns.size() == 160);
+    // The mass-ratio chains have the ratio they say across every joint.
+    const sim::StressSetup chain = setupOf("chain-mass-1000");
+    const auto& bodies = chain.figures[0].bodies;
+    for (const figure::FigureConstraint& c : chain.figures[0].constraints)
+        CHECK(bodies[c.body1].massKg / bodies[c.body2].massKg == Approx(c.body1 % 2 == 0 ? 0.001 : 1000).epsilon(1e-4));
+}
+
+TEST_CASE("stress: the detector reports the first failure with its documented cause", "[sim][stress]") {
+    const sim::StressMethod def = method("default");
+    SECTION("a body faster than 100 m/s: speed, in the first step") {
+        sim::StressSetup s = setupOf("tiny-bodies");
+        s.spawns[0].linearVelocity = Eigen::Vector3d(150, 0, 0);
+        const sim::StressResult r = sim::runStress(s, def);
+        CHECK(r.cause == sim::StressCause::Speed);
+        REQUIRE(r.failedAtS);
+        CHECK(*r.failedAtS == Approx(1.0 / 60));
+    }
+    SECTION("a limit bound tighter than what plain Bullet leaves of the spawn's excess: limit, in the first step") {
+        sim::StressSetup s = setupOf("humanoid-outside-limits", bundled());
+        sim::StressThresholds th;
+        th.maxLimitOvershootDeg = 10; // the knees and elbows start 20° outside; raw's soft limits leave 19° of it
+        const sim::StressResult r = sim::runStress(s, method("raw"), th);
+        CHECK(r.cause == sim::StressCause::Limit);
+        CHECK(r.failedAtS.value_or(99) == Approx(1.0 / 60));
+    }
+    SECTION("plain Bullet's 30-link rope comes apart: anchor") {
+        const sim::StressResult r = sim::runStress(setupOf("rope-30"), method("raw"));
+        CHECK(r.cause == sim::StressCause::Anchor);
+        CHECK(r.maxAnchorErrorM > 0.1);
+    }
+    SECTION("no time to rest: no-rest, at the end of the run") {
+        sim::StressSetup s = setupOf("chain-mass-1");
+        s.spawns[0].entity.rotation.setIdentity(); // level: it falls without turning
+        sim::StressThresholds th;
+        th.restWithinS = 0.3; // still falling
+        const sim::StressResult r = sim::runStress(s, def, th);
+        CHECK(r.cause == sim::StressCause::NoRest);
+        CHECK(r.simulatedS == Approx(0.3));
+    }
+    SECTION("a body spinning in its last second: jitter") {
+        sim::StressSetup s = setupOf("tiny-bodies");
+        s.spawns[0].angularVelocity = Eigen::Vector3d(0, 0, 30);
+        sim::StressThresholds th;
+        th.restWithinS = 0.25;
+        const sim::StressResult r = sim::runStress(s, def, th);
+        CHECK(r.cause == sim::StressCause::Jitter);
+    }
+    SECTION("energy bound below zero: any run gains 'energy' at once") {
+        sim::StressThresholds th;
+        th.maxEnergyGainJ = -1;
+        const sim::StressResult r = sim::runStress(setupOf("chain-mass-1"), def, th);
+        CHECK(r.cause == sim::StressCause::EnergyGain);
+    }
+}
+
+// The CI subset: the default method passes every row of it (the full matrix: afb stress, README "Stability").
+TEST_CASE("stress: the default method passes the CI subset of the matrix", "[sim][stress]") {
+    const sim::StressContent content = bundled();
+    const sim::StressMethod def = method("default");
+    for (std::string_view name : sim::stressCiScenarios()) {
+        const sim::StressScenario* s = sim::findStressScenario(name);
+        REQUIRE(s != nullptr);
+        const sim::StressResult r = sim::runStress(*s->build(content), def);
+        INFO(name << ": " << sim::toString(r.cause) << " at " << r.failedAtS.value_or(0) << " s: " << r.detail);
+        CHECK(r.passed());
+        CHECK(r.restAtS.has_value());
+    }
+}
+
+TEST_CASE("stress: runs are deterministic and the matrix does not depend on the thread count", "[sim][stress]") {
+    std::vector<const sim::StressScenario*> scenarios = {sim::findStressScenario("chain-mass-10"),
+                                                         sim::findStressScenario("overlap")};
+    const std::vector<sim::StressMethod> methods = {method("raw"), method("fast")};
+    const auto one = sim::runStressMatrix(scenarios, methods, {}, {}, 1);
+    const auto two = sim::runStressMatrix(scenarios, methods, {}, {}, 2);
+    REQUIRE(one.size() == 4);
+    REQUIRE(two.size() == 4);
+    for (std::size_t i = 0; i < one.size(); ++i) {
+        CHECK(one[i].scenario == two[i].scenario);
+        CHECK(one[i].method == two[i].method);
+        CHECK(one[i].cause == two[i].cause);
+        CHECK(one[i].simulatedS == two[i].simulatedS);
+        CHECK(one[i].maxAnchorErrorM == two[i].maxAnchorErrorM);
+        CHECK(one[i].maxEnergyGainJ == two[i].maxEnergyGainJ);
+    }
+    const std::string md = sim::stressMarkdown(one, methods, {});
+    CHECK(md.find("| chain-mass-10 |") != std::string::npos);
+    CHECK(sim::stressJson(one, methods, {}).find("\"max_energy_gain_j\"") != std::string::npos);
+}
+
+namespace {
+
+// Three humanoids apart from each other and a box of the user's, falling onto the ground; at step `injectAt` a
+// NaN is written into one body of the first humanoid. Returns the trajectories of everything but that humanoid.
+struct GuardRun {
+    std::vector<std::vector<btTransform>> others; // per step: humanoids 1 and 2, then the user's box
+    int trips = 0;
+    std::optional<bullet::GuardTrip> trip;
+    int callbacks = 0;
+    bool firstFinite = true, firstAtRest = false;
+};
+
+GuardRun guardRun(int injectAt, int freezeAt = -1) {
+    static const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    GuardRun out;
+    sim::Scene scene(bullet::Method{});
+    for (int i = 0; i < 3; ++i) {
+        bullet::SpawnOptions so;
+        so.entityTransform.setOrigin(btVector3(btScalar(3.0 * i), 0, 1.5));
+        so.guard.onTrip = [&out](bullet::Ragdoll&, const bullet::GuardTrip&) { ++out.callbacks; };
+        scene.spawn(asset, so);
+    }
+    btBoxShape boxShape(btVector3(0.2f, 0.2f, 0.2f));
+    btVector3 inertia;
+    boxShape.calculateLocalInertia(5, inertia);
+    btRigidBody box(btRigidBody::btRigidBodyConstructionInfo(5, nullptr, &boxShape, inertia));
+    box.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(-3, 0, 2)));
+    box.setAngularVelocity(btVector3(1, 2, 3));
+    scene.world().addRigidBody(&box);
+    const auto& dolls = scene.ragdolls();
+    for (int step = 0; step < 120; ++step) {
+        if (step == injectAt)
+            dolls[0]->body(3).setLinearVelocity(btVector3(std::numeric_limits<btScalar>::quiet_NaN(), 0, 0));
+        if (step == freezeAt) dolls[0]->freeze();
+        scene.step(1.0 / 60);
+        std::vector<btTransform> now;
+        for (std::size_t k = 1; k < dolls.size(); ++k)
+            for (int i = 0; i < dolls[k]->bodyCount(); ++i) now.push_back(dolls[k]->body(i).getCenterOfMassTransform());
+        now.push_back(box.getCenterOfMassTransform());
+        out.others.push_back(now);
+        for (int i = 0; i < dolls[0]->bodyCount(); ++i) {
+            const figure::BodyState s = dolls[0]->bodyStates()[static_cast<std::size_t>(i)];
+            out.firstFinite = out.firstFinite && s.pose.position.allFinite() && s.linearVelocity.allFinite() &&
+                              s.angularVelocity.allFinite();
+        }
+    }
+    out.trips = dolls[0]->guardTrips();
+    out.trip = dolls[0]->lastGuardTrip();
+    out.firstAtRest = dolls[0]->atRest();
+    scene.world().removeRigidBody(&box);
+    return out;
+}
+
+bool finite(const btTransform& t) {
+    for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(t.getOrigin()[k]) || !std::isfinite(t.getBasis()[k][0]) ||
+            !std::isfinite(t.getBasis()[k][1]) || !std::isfinite(t.getBasis()[k][2]))
+            return false;
+    return true;
+}
+
+} // namespace
+
+TEST_CASE("explosion guard: a NaN in one ragdoll never reaches the others or the user's bodies", "[bullet][guard]") {
+    const GuardRun clean = guardRun(-1);
+    const GuardRun frozen = guardRun(-1, 30); // the game freezes the first humanoid itself at step 30
+    const GuardRun injected = guardRun(30);   // a NaN is written into it before step 30
+    CHECK(clean.trips == 0);
+    CHECK(clean.callbacks == 0);
+    CHECK(frozen.trips == 0);
+    // The poisoned ragdoll was put back and frozen, once, and the game was told.
+    CHECK(injected.trips == 1);
+    CHECK(injected.callbacks == 1);
+    REQUIRE(injected.trip);
+    CHECK(injected.trip->cause == bullet::GuardTrip::Cause::NonFinite);
+    CHECK(injected.trip->body == 3);
+    CHECK(injected.firstFinite);
+    CHECK(injected.firstAtRest);
+    // Everything else moved exactly as when the game froze that ragdoll itself: bit for bit, every step, so nothing
+    // of the NaN reached them. The user's box (alone in its island) moved exactly as without any of it; the other
+    // ragdolls did within Bullet's solve order (it sorts every manifold of the world by island with an unstable
+    // sort, so a ragdoll that stops moving reorders the contact rows of the others: 1e-5 m in the step).
+    REQUIRE(clean.others.size() == injected.others.size());
+    REQUIRE(frozen.others.size() == injected.others.size());
+    int differences = 0, boxDifferences = 0;
+    for (std::size_t s = 0; s < injected.others.size(); ++s)
+        for (std::size_t i = 0; i < injected.others[s].size(); ++i) {
+            const btTransform& b = injected.others[s][i];
+            REQUIRE(finite(b));
+            const btTransform& f = frozen.others[s][i];
+            if (!(f.getOrigin() == b.getOrigin() && f.getBasis() == b.getBasis())) ++differences;
+            const btTransform& a = clean.others[s][i];
+            if (i + 1 == injected.others[s].size() && !(a.getOrigin() == b.getOrigin() && a.getBasis() == b.getBasis()))
+                ++boxDifferences;
+        }
+    CHECK(differences == 0);
+    CHECK(boxDifferences == 0);
+}
+
+TEST_CASE("explosion guard: a body beyond the speed bound is restored and frozen; off, nothing is checked",
+          "[bullet][guard]") {
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    for (bool enabled : {true, false}) {
+        sim::Scene scene(bullet::Method{});
+        bullet::SpawnOptions so;
+        so.entityTransform.setOrigin(btVector3(0, 0, 1.5));
+        so.guard.enabled = enabled;
+        bullet::Ragdoll& doll = scene.spawn(asset, so);
+        for (int step = 0; step < 10; ++step) scene.step(1.0 / 60);
+        const btVector3 before = doll.body(0).getCenterOfMassPosition();
+        doll.body(0).setLinearVelocity(btVector3(500, 0, 0));
+        scene.step(1.0 / 60);
+        if (enabled) {
+            CHECK(doll.guardTrips() == 1);
+            REQUIRE(doll.lastGuardTrip());
+            CHECK(doll.lastGuardTrip()->cause == bullet::GuardTrip::Cause::Speed);
+            CHECK(doll.lastGuardTrip()->value > 100);
+            CHECK(doll.atRest());
+            CHECK(doll.body(0).getCenterOfMassPosition() == before); // the state after the last good substep
+            CHECK(doll.body(0).getLinearVelocity().length() == 0);
+        } else {
+            CHECK(doll.guardTrips() == 0);
+            CHECK(doll.body(0).getCenterOfMassPosition().x() > before.x() + 1);
+        }
+    }
+}
+
+TEST_CASE("velocity clamp: no body leaves a substep faster than the clamp; off by default", "[bullet][guard]") {
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    sim::Scene scene(bullet::Method{}, {.gravityMps2 = 0, .ground = false});
+    bullet::SpawnOptions clamped;
+    clamped.velocityClamp = {10.0, 5.0};
+    bullet::Ragdoll& a = scene.spawn(asset, clamped);
+    bullet::SpawnOptions free;
+    free.entityTransform.setOrigin(btVector3(10, 0, 0));
+    bullet::Ragdoll& b = scene.spawn(asset, free);
+    for (bullet::Ragdoll* d : {&a, &b}) {
+        d->body(0).setLinearVelocity(btVector3(30, 0, 0));
+        d->body(0).setAngularVelocity(btVector3(0, 0, 20));
+    }
+    scene.step(1.0 / 60);
+    for (int i = 0; i < a.bodyCount(); ++i) {
+        CHECK(a.body(i).getLinearVelocity().length() <= 10.0 + 1e-4);
+        CHECK(a.body(i).getAngularVelocity().length() <= 5.0 + 1e-4);
+    }
+    double fastest = 0;
+    for (int i = 0; i < b.bodyCount(); ++i) fastest = std::max(fastest, double(b.body(i).getLinearVelocity().length()));
+    CHECK(fastest > 10);
+}
+
+// The guard's cost, on demand: 4 humanoids dropped 1 m, 300 steps, sleeping off, guard as $AFB_GUARD says (on
+// unless "off"). cmake/stress-guard-cost.sh runs it under callgrind, counting inside stepSimulation.
+TEST_CASE("explosion guard: cost run", "[.guard-cost]") {
+    const char* env = std::getenv("AFB_GUARD");
+    const bool enabled = !(env && std::string(env) == "off");
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    sim::Scene scene(bullet::Method{});
+    for (int i = 0; i < 4; ++i) {
+        bullet::SpawnOptions so;
+        so.entityTransform =
+            btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.65 * i)), btVector3(btScalar(3 * i), 0, 1.5));
+        so.comeToRest = false;
+        so.guard.enabled = enabled;
+        scene.spawn(asset, so);
+    }
+    for (int step = 0; step < 300; ++step) scene.step(1.0 / 60);
+    CHECK(scene.ragdolls()[0]->guardTrips() == 0);
+}
