@@ -69,7 +69,7 @@ class Ragdoll::Action : public btActionInterface {
         atRest = false;
         activeTime = 0;
         m_rest.reset();
-        m_owner.thaw();
+        m_owner.thawBodies();
         for (const auto& b : m_owner.m_bodies) b->activate(true);
     }
 
@@ -274,7 +274,7 @@ void Ragdoll::putToRest() {
         b->forceActivationState(ISLAND_SLEEPING);
     }
     m_action->atRest = true;
-    if (m_manager) freeze();
+    if (m_manager) freezeBodies();
 }
 
 // A resting ragdoll of a RagdollWorld costs (almost) nothing per step: its constraints leave the world and its
@@ -282,7 +282,7 @@ void Ragdoll::putToRest() {
 // against the ground nor each other nor other resting ragdolls), until the world sees a contact with an active
 // body (RagdollWorld) or the ragdoll is woken. Bullet's own sleeping leaves every sleeping body and constraint in
 // its per-step loops, its island sort, and its pairs with the ground (README: Economy).
-void Ragdoll::freeze() {
+void Ragdoll::freezeBodies() {
     if (m_frozen) return;
     m_frozen = true;
     m_frozenContact = {};
@@ -307,7 +307,7 @@ void Ragdoll::freeze() {
     }
 }
 
-void Ragdoll::thaw() {
+void Ragdoll::thawBodies() {
     if (!m_frozen) return;
     m_frozen = false;
     const figure::Figure& f = figure();

@@ -232,8 +232,8 @@ class Ragdoll {
     void addBodies(const SpawnOptions& options);
     void addConstraints();
     void filterPairs();
-    void freeze();
-    void thaw();
+    void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
+    void thawBodies();
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
 
