@@ -253,6 +253,7 @@ bool RagdollSolver::buildDirect() {
     for (std::size_t g = 0; g < d.groups.size(); ++g) {
         Direct::Group& group = d.groups[g];
         const std::vector<Column>& cols = columns[g];
+        if (cols.empty()) continue; // no other row touches the group (Eigen's solve of a 0-column matrix is UB)
         const Eigen::Index k = static_cast<Eigen::Index>(group.rows.size());
         Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
         for (std::size_t col = 0; col < cols.size(); ++col) {
