@@ -22,21 +22,8 @@ using afb::bullet::RagdollAsset;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr double kUnit = 0.0254;
 
-// Skeleton: origin, top, arm (identity orientations). The arm is a 20-unit box along +X from the anchor.
-const std::vector<afb::test::TestJoint> kJoints = {{"origin", -1, 0, 0, 0},
-                                                   {"top", 0, 0, 0, 104},
-                                                   {"arm", 1, 0, 0, 100}};
-
 afb::figure::Figure armFigure(const std::string& constraint) {
-    const std::string text =
-        "articulatedFigure t {\n settings { selfCollision 0 }\n"
-        " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, "
-        "104 ) density 0.1 }\n"
-        " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) "
-        "density 0.2 }\n"
-        " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
-        constraint + "\n}\n";
-    const auto built = afb::test::buildTestFigure(text, kJoints);
+    const auto built = afb::test::buildArmFigure(constraint);
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     return *built.figure;

@@ -42,20 +42,8 @@ btTransform spawnTransform() {
     return btTransform(q, btVector3(btScalar(1.5), btScalar(-2.0), btScalar(0.75)));
 }
 
-// Skeleton: origin, top, arm (identity orientations). The arm is a 20-unit box along +X from the anchor at
-// (0, 0, 100); `top` hangs from the world by a fixed joint.
-const std::vector<afb::test::TestJoint> kJoints = {{"origin", -1, 0, 0, 0},
-                                                   {"top", 0, 0, 0, 104},
-                                                   {"arm", 1, 0, 0, 100}};
-
 Figure armFigure(const std::string& constraint) {
-    const std::string text =
-        "articulatedFigure t {\n settings { selfCollision 0 }\n"
-        " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
-        " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 }\n"
-        " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
-        constraint + "\n}\n";
-    const auto built = afb::test::buildTestFigure(text, kJoints);
+    const auto built = afb::test::buildArmFigure(constraint);
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     return *built.figure;
