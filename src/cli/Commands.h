@@ -26,6 +26,9 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv);
 /// Registers `afb stress`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
 void addStressCommand(CLI::App& app, int& exitCode, char** argv);
 
+/// Registers `afb gen`.
+void addGenCommand(CLI::App& app, int& exitCode);
+
 /// Replaces this process by the sibling binary built against the other Bullet precision ("afb" for float,
 /// "afb-double" for double) with the same arguments: the two builds cannot share a process. Returns only when
 /// that fails, after printing why (`command` names the caller in the message).

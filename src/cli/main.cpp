@@ -3,7 +3,7 @@
 
 int main(int argc, char** argv) {
     CLI::App app{"afb — Doom 3 articulated figures (.af) on Bullet: parse, format, resolve, inspect, drop, "
-                 "golden, draw, chart, stress.\n"
+                 "golden, draw, chart, stress, gen.\n"
                  "Diagnostics go to stderr as file:line:col: error: message; exit code 1 on any error."};
     app.require_subcommand(1);
     app.set_version_flag("--version", "afb " AFB_VERSION);
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     afb::cli::addDrawCommand(app, exitCode);
     afb::cli::addChartCommand(app, exitCode, argv);
     afb::cli::addStressCommand(app, exitCode, argv);
+    afb::cli::addGenCommand(app, exitCode);
     CLI11_PARSE(app, argc, argv);
     return exitCode;
 }

@@ -1,0 +1,128 @@
+#pragma once
+// afb gen (issue 14): a ragdoll figure from a rigged mesh. Bodies are fitted to the vertices weighted to each bone
+// or group of bones, joints come from a humanoid template matched by bone names, and the result is a complete
+// content folder (af/N.af, def/N.def, models/md5/N/N.md5mesh + af_pose.md5anim) that decl::Library, afb inspect
+// and afb drop read as they read Doom's own.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "afb/decl/Af.h"
+#include "afb/gen/Rig.h"
+#include "afb/text/Diagnostics.h"
+
+namespace afb::gen {
+
+/// How the constraint at one bone is made: matched against the name of the joint where the child body starts.
+struct JointTemplate {
+    std::string role;    ///< what the template is for ("knee", "shoulder", …), for reports
+    std::string pattern; ///< ECMAScript regular expression, searched case-insensitively in the joint name
+    decl::ConstraintType type = decl::ConstraintType::Universal; ///< Universal, Hinge, BallAndSocket or Fixed
+    double coneDeg = 60;       ///< universal / ball-and-socket: full apex angle of the cone limit, degrees (0: none)
+    double tiltDeg = 0;        ///< the cone's axis, tilted from the bone's bind direction by this much …
+    std::string tiltToward;    ///< … toward "down", "up", "forward" or "back" (model space); empty: no tilt
+    double minDeg = 0;         ///< hinge: least bend from the bind pose, degrees (negative: past straight)
+    double maxDeg = 120;       ///< hinge: most bend from the bind pose, degrees
+    std::string bend = "back"; ///< hinge: the child swings "back" or "forward" when it bends
+    double friction = 0.4;     ///< joint friction (af-format §4.8)
+};
+
+/// Every choice afb gen makes, overridable by a JSON rules file (see loadRules).
+struct GenRules {
+    double weightThreshold = 0.5; ///< a vertex belongs to the body whose bones weigh it at least this much
+    /// Bones always merged into their parent's body (regular expressions, case-insensitive): fingers, toes, twist
+    /// and helper bones, hands and feet (Doom merges them into the forearm and the shin), props.
+    std::vector<std::string> merge;
+    std::vector<std::string> keep; ///< bones that always get a body of their own (win over merge and size rules)
+    /// Bones whose vertices no body is fitted to (weapons, shields, props): they still merge into the parent's body,
+    /// which drives them, but do not inflate it.
+    std::vector<std::string> skip;
+    /// A bone whose vertices and length (to its farthest child joint) both span less than this fraction of the
+    /// model's height merges into its parent's body.
+    double minBodyFraction = 0.08;
+    int minVertices = 8;              ///< so does a bone with fewer vertices than this …
+    double minVertexFraction = 0.005; ///< … or than this fraction of the model's vertices
+    std::vector<std::string> shapes;  ///< shapes tried, smallest enclosing volume wins: box, cylinder,
+                                      ///< dodecahedron, octahedron, bone
+    /// Total mass = this × the bodies' volume when no --mass is given. The bodies enclose the mesh, so they hold
+    /// about twice its volume: 500 gives a human-sized figure about what Doom's weigh (zsec: 250).
+    double densityKgM3 = 500;
+    std::optional<Eigen::Vector3d> forward; ///< the model's forward direction (model space); default: from the
+                                            ///< feet (toe − ankle), else +X (Doom's)
+    std::vector<JointTemplate> joints;      ///< first match wins
+    JointTemplate fallback;                 ///< for every other bone
+};
+
+/// The built-in humanoid template.
+GenRules defaultRules();
+
+/// The default rules with the keys of a JSON file written over them. Keys: weightThreshold, merge, keep, skip,
+/// minBodyFraction, minVertices, minVertexFraction, shapes, densityKgM3, forward ([x, y, z]), joints (a list: each
+/// {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg, tiltDeg, tiltToward, minDeg, maxDeg, bend,
+/// friction}; put before the defaults, so they win), fallback (an object as in joints). An unknown key, a wrong type or
+/// a bad regular expression is an error naming the file.
+std::optional<GenRules> loadRules(const std::filesystem::path& path, text::Diagnostics& diagnostics);
+/// The same from JSON text; `fileName` is used in messages.
+std::optional<GenRules> parseRules(const std::string& json, const std::string& fileName,
+                                   text::Diagnostics& diagnostics);
+
+/// What to generate.
+struct GenOptions {
+    std::string name;             ///< the figure's name: the .af decl, the entityDef, file names
+    std::optional<double> massKg; ///< total mass; default rules.densityKgM3 × volume
+    GenRules rules = defaultRules();
+};
+
+/// One generated body, for reports and tests.
+struct GeneratedBody {
+    std::string name;
+    std::string joint; ///< the joint it drives ("origin" for the base body)
+    decl::ShapeKind shape = decl::ShapeKind::Box;
+    Eigen::Vector3d centre;  ///< centre of its shape at the bind pose, model space, Doom units
+    double volumeUnits3 = 0; ///< Doom units³
+    double massKg = 0;
+    std::vector<int> joints; ///< the rig joints it contains (containedJoints)
+    int vertices = 0;        ///< vertices fitted
+};
+
+/// One generated constraint, for reports.
+struct GeneratedJoint {
+    std::string name;
+    std::string role; ///< the template that matched ("" for the fallback)
+    int body1 = 0, body2 = 0;
+};
+
+/// A generated figure and every file of its content folder, as values.
+struct Generated {
+    std::string name;
+    decl::AfDecl af;
+    decl::Md5Mesh mesh;
+    decl::Md5Anim afPose;
+    Eigen::Vector3d modelOffset = Eigen::Vector3d::Zero(); ///< the model decl's offset: the root joint's bind position
+    std::vector<GeneratedBody> bodies;
+    std::vector<GeneratedJoint> joints;
+    double totalMassKg = 0;
+};
+
+/// Fits bodies and joints to `rig`. Errors (nothing to fit, a figure the figure layer refuses) in `diagnostics`.
+std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& options, text::Diagnostics& diagnostics);
+
+/// Paths of a generated content folder, relative to its root.
+struct ContentPaths {
+    std::string af, def, mesh, afPose;
+};
+ContentPaths contentPaths(const std::string& name);
+
+/// The `.def` text: a model decl (mesh, offset, af_pose) and an entityDef (idAFEntity_Generic, articulatedFigure).
+std::string defText(const Generated& generated);
+
+/// Writes the content folder under `dir` (creating folders). Errors name the file.
+bool writeContent(const Generated& generated, const std::filesystem::path& dir, text::Diagnostics& diagnostics);
+
+/// A figure name from a file name: letters, digits and '_' (others become '_'), not starting with a digit.
+std::string figureNameFor(const std::filesystem::path& model);
+
+} // namespace afb::gen

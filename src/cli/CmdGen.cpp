@@ -1,0 +1,119 @@
+// afb gen MODEL --out DIR: a ragdoll figure from a rigged mesh (issue 14), written as a content folder.
+#include <cstdio>
+#include <iostream>
+
+#include "Commands.h"
+#include "afb/gen/Generate.h"
+
+namespace afb::cli {
+namespace {
+
+const char* shapeName(decl::ShapeKind k) {
+    switch (k) {
+    case decl::ShapeKind::Box: return "box";
+    case decl::ShapeKind::Octahedron: return "octahedron";
+    case decl::ShapeKind::Dodecahedron: return "dodecahedron";
+    case decl::ShapeKind::Cylinder: return "cylinder";
+    case decl::ShapeKind::Cone: return "cone";
+    case decl::ShapeKind::Bone: return "bone";
+    }
+    return "?";
+}
+
+} // namespace
+
+void addGenCommand(CLI::App& app, int& exitCode) {
+    auto* cmd = app.add_subcommand(
+        "gen", "Generate a ragdoll figure from a rigged mesh (.md5mesh, or any format assimp reads: FBX, glTF/GLB, "
+               "Collada, X, B3D, ...): writes DIR/af/N.af, DIR/def/N.def and DIR/models/md5/N/ (mesh and af_pose)");
+    struct Options {
+        std::filesystem::path model, out, rules;
+        std::string name;
+        std::optional<double> massKg, unitM, heightM;
+        std::string up;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("model", opt->model, "The rigged mesh")->required();
+    cmd->add_option("--out", opt->out, "Content folder to write into (created when missing)")->required();
+    cmd->add_option("--name", opt->name,
+                    "Figure name (the .af decl, the entityDef, file names); default: the "
+                    "model's file name");
+    cmd->add_option("--mass", opt->massKg, "Total mass, kg (default: 500 kg/m^3 times the bodies' volume)")
+        ->check(CLI::Range(0.01, 1e5));
+    cmd->add_option("--rules", opt->rules, "JSON rules overriding the built-in humanoid template (README: afb gen)");
+    cmd->add_option("--unit-m", opt->unitM,
+                    "Metres per model unit (default by format: md5 0.0254, glTF 1, FBX "
+                    "0.01 x UnitScaleFactor, others 0.0254)")
+        ->check(CLI::Range(1e-9, 1e9));
+    cmd->add_option("--height", opt->heightM, "Scale the model to this height (its largest extent), metres")
+        ->check(CLI::Range(0.01, 100.0));
+    cmd->add_option("--up", opt->up, "The model's up axis (default: y for assimp formats, z for md5)")
+        ->check(CLI::IsMember({"y", "z"}));
+    cmd->add_flag("--json", opt->json, "Print the generated bodies and joints as JSON on stdout");
+    cmd->callback([opt, &exitCode] {
+        text::Diagnostics diags;
+        gen::GenOptions options;
+        options.name = opt->name.empty() ? gen::figureNameFor(opt->model) : opt->name;
+        options.massKg = opt->massKg;
+        if (!opt->rules.empty()) {
+            auto rules = gen::loadRules(opt->rules, diags);
+            if (!rules) {
+                printDiagnostics(diags);
+                exitCode = 1;
+                return;
+            }
+            options.rules = std::move(*rules);
+        }
+        gen::ImportOptions import;
+        import.metresPerUnit = opt->unitM;
+        import.heightM = opt->heightM;
+        if (!opt->up.empty()) import.up = opt->up[0];
+        std::optional<gen::Generated> generated;
+        if (auto rig = gen::importRig(opt->model, import, diags)) generated = gen::generateFigure(*rig, options, diags);
+        if (generated && !gen::writeContent(*generated, opt->out, diags)) generated.reset();
+        printDiagnostics(diags);
+        if (!generated) {
+            exitCode = 1;
+            return;
+        }
+        const gen::ContentPaths paths = gen::contentPaths(generated->name);
+        if (opt->json) {
+            nlohmann::json bodies = nlohmann::json::array(), joints = nlohmann::json::array();
+            for (const auto& b : generated->bodies)
+                bodies.push_back({{"name", b.name},
+                                  {"joint", b.joint},
+                                  {"shape", shapeName(b.shape)},
+                                  {"massKg", b.massKg},
+                                  {"vertices", b.vertices},
+                                  {"joints", b.joints.size()}});
+            for (const auto& j : generated->joints)
+                joints.push_back({{"name", j.name},
+                                  {"role", j.role},
+                                  {"body1", generated->bodies[static_cast<std::size_t>(j.body1)].name},
+                                  {"body2", generated->bodies[static_cast<std::size_t>(j.body2)].name}});
+            std::cout << nlohmann::json{{"name", generated->name},
+                                        {"totalMassKg", generated->totalMassKg},
+                                        {"files", {paths.af, paths.def, paths.mesh, paths.afPose}},
+                                        {"bodies", bodies},
+                                        {"constraints", joints}}
+                             .dump(2)
+                      << "\n";
+            return;
+        }
+        std::printf("figure %s: %zu bodies, %zu constraints, %zu md5 joints, total mass %.1f kg\n",
+                    generated->name.c_str(), generated->bodies.size(), generated->joints.size(),
+                    generated->mesh.joints.size(), generated->totalMassKg);
+        for (const auto& b : generated->bodies)
+            std::printf("  body %-16s %-12s %6.2f kg  %5d vertices  %zu joints\n", b.name.c_str(), shapeName(b.shape),
+                        b.massKg, b.vertices, b.joints.size());
+        for (const auto& j : generated->joints)
+            std::printf("  joint %-15s %-9s %s - %s\n", j.name.c_str(), j.role.empty() ? "(default)" : j.role.c_str(),
+                        generated->bodies[static_cast<std::size_t>(j.body1)].name.c_str(),
+                        generated->bodies[static_cast<std::size_t>(j.body2)].name.c_str());
+        std::printf("wrote %s/{%s, %s, %s, %s}\n", opt->out.string().c_str(), paths.af.c_str(), paths.def.c_str(),
+                    paths.mesh.c_str(), paths.afPose.c_str());
+    });
+}
+
+} // namespace afb::cli

@@ -1,0 +1,352 @@
+// afb gen's bodies: which bones share a body, and the smallest of Doom's shapes that holds each body's vertices.
+#include "Fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <regex>
+
+#include <Eigen/Eigenvalues>
+
+#include "afb/figure/Polytope.h"
+
+namespace afb::gen::detail {
+namespace {
+
+bool matchesAny(const std::vector<std::regex>& res, const std::string& name) {
+    return std::any_of(res.begin(), res.end(), [&](const std::regex& re) { return std::regex_search(name, re); });
+}
+
+std::vector<std::regex> compile(const std::vector<std::string>& patterns) {
+    std::vector<std::regex> out;
+    for (const std::string& p : patterns) out.emplace_back(p, std::regex::ECMAScript | std::regex::icase);
+    return out;
+}
+
+double extentOf(const std::vector<Eigen::Vector3d>& points) {
+    if (points.empty()) return 0;
+    Eigen::Vector3d lo = points[0], hi = points[0];
+    for (const auto& p : points) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    return (hi - lo).maxCoeff();
+}
+
+// Principal axes of a point cloud (columns, by decreasing variance), a right-handed basis.
+Eigen::Matrix3d principalAxes(const std::vector<Eigen::Vector3d>& points) {
+    if (points.size() < 2) return Eigen::Matrix3d::Identity();
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : points) mean += p;
+    mean /= static_cast<double>(points.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& p : points) cov += (p - mean) * (p - mean).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+    Eigen::Matrix3d axes;
+    for (int i = 0; i < 3; ++i) axes.col(i) = solver.eigenvectors().col(2 - i);
+    if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+    return axes;
+}
+
+// A unit vector perpendicular to `d`, as close as possible to `hint`.
+Eigen::Vector3d perpendicular(const Eigen::Vector3d& d, const Eigen::Vector3d& hint) {
+    Eigen::Vector3d p = hint - d * d.dot(hint);
+    if (p.norm() < 1e-6) p = d.unitOrthogonal();
+    return p.normalized();
+}
+
+// The smallest uniform scale s about the origin for which every point lies inside `polytope` scaled by s.
+double enclosingScale(const figure::Polytope& polytope, const std::vector<Eigen::Vector3d>& localPoints) {
+    const auto planes = figure::facePlanes(polytope.vertices, polytope.faces);
+    double s = 0;
+    for (const auto& p : localPoints)
+        for (const auto& plane : planes)
+            if (plane.offset > 1e-12) s = std::max(s, plane.normal.dot(p) / plane.offset);
+    return s;
+}
+
+double boxVolume(const Eigen::Vector3d& half) { return 8 * half.x() * half.y() * half.z(); }
+
+// Fits every allowed shape in the body's frame and keeps the one of least volume that holds all its points.
+void fitShape(BodyFit& body, const std::vector<std::string>& shapes) {
+    std::vector<Eigen::Vector3d> local;
+    local.reserve(body.points.size());
+    for (const auto& p : body.points) local.push_back(body.frame.transpose() * (p - body.centre));
+    const Eigen::Vector3d half = body.halfExtents;
+    double best = std::numeric_limits<double>::infinity();
+    for (const std::string& kind : shapes) {
+        double volume = 0;
+        Eigen::Vector3d h = half;
+        decl::ShapeKind shape = decl::ShapeKind::Box;
+        int sides = 0;
+        double boneLength = 0, boneWidth = 0;
+        if (kind == "box") {
+            volume = boxVolume(h);
+        } else if (kind == "cylinder") {
+            // A prism along Z: scale the cross-section only, the end faces are the bounds'.
+            shape = decl::ShapeKind::Cylinder;
+            sides = 8;
+            std::vector<Eigen::Vector3d> flat;
+            for (const auto& p : local) flat.emplace_back(p.x(), p.y(), 0);
+            const auto build = figure::makeCylinder(-Eigen::Vector3d(half.x(), half.y(), 1),
+                                                    Eigen::Vector3d(half.x(), half.y(), 1), sides);
+            const double s = std::max(enclosingScale(build.polytope, flat), 1e-9);
+            h = Eigen::Vector3d(half.x() * s, half.y() * s, half.z());
+            volume = sides / 2.0 * std::sin(2 * M_PI / sides) * h.x() * h.y() * 2 * h.z();
+        } else if (kind == "octahedron" || kind == "dodecahedron") {
+            const bool octa = kind == "octahedron";
+            shape = octa ? decl::ShapeKind::Octahedron : decl::ShapeKind::Dodecahedron;
+            const auto poly = octa ? figure::makeOctahedron(-half, half) : figure::makeDodecahedron(-half, half);
+            const double s = std::max(enclosingScale(poly, local), 1e-9);
+            h = half * s;
+            volume = (octa ? 1.0 / 6.0 : (3 * std::sqrt(5.0) - 5) / 4) * boxVolume(h);
+        } else if (kind == "bone") {
+            // The bone's own frame (figure::boneFrame along the fit's Z) about the centre.
+            shape = decl::ShapeKind::Bone;
+            const Eigen::Vector3d d = body.frame.col(2);
+            const Eigen::Matrix3d boneAxes = figure::boneFrame(body.centre - d, body.centre + d);
+            std::vector<Eigen::Vector3d> boneLocal;
+            for (const auto& p : body.points) boneLocal.push_back(boneAxes.transpose() * (p - body.centre));
+            const double l0 = 2 * half.z(), w0 = 2 * std::max(half.x(), half.y());
+            const double s = std::max(enclosingScale(figure::makeBone(l0, w0), boneLocal), 1e-9);
+            boneLength = l0 * s;
+            boneWidth = w0 * s;
+            volume = boneWidth * boneWidth * boneLength / 8;
+        } else {
+            continue;
+        }
+        if (volume < best) {
+            best = volume;
+            body.shape = shape;
+            body.halfExtents = h;
+            body.sides = sides;
+            body.boneLength = boneLength;
+            body.boneWidth = boneWidth;
+            body.volume = volume;
+        }
+    }
+}
+
+} // namespace
+
+double modelHeight(const Rig& rig) {
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& s : rig.surfaces)
+        for (const auto& v : s.vertices) points.push_back(v.position);
+    if (points.empty())
+        for (const auto& j : rig.joints) points.push_back(j.bind.position);
+    return extentOf(points);
+}
+
+Eigen::Vector3d doomAngles(const Eigen::Matrix3d& r) {
+    // forward = column 0 = (cp·cy, cp·sy, −sp); roll from the left and up rows' z components (af-format §0).
+    const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+    double yaw = 0, roll = 0;
+    if (std::abs(r(2, 0)) < 1 - 1e-12) {
+        yaw = std::atan2(r(1, 0), r(0, 0));
+        roll = std::atan2(r(2, 1), r(2, 2));
+    } else {
+        yaw = std::atan2(-r(0, 1), r(1, 1)); // gimbal lock: the roll folds into the yaw
+    }
+    return Eigen::Vector3d(pitch, yaw, roll) * 180.0 / M_PI;
+}
+
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
+    const int n = static_cast<int>(rig.joints.size());
+    const double height = std::max(modelHeight(rig), 1e-6);
+    const auto mergeRe = compile(rules.merge);
+    const auto keepRe = compile(rules.keep);
+    const auto skipRe = compile(rules.skip);
+
+    // Each vertex counts for the joint that weighs it most.
+    std::vector<std::vector<Eigen::Vector3d>> owned(static_cast<std::size_t>(n));
+    std::vector<bool> skipped(static_cast<std::size_t>(n), false);
+    for (int j = 0; j < n; ++j)
+        skipped[static_cast<std::size_t>(j)] = matchesAny(skipRe, rig.joints[static_cast<std::size_t>(j)].name);
+    std::size_t vertexCount = 0;
+    for (const auto& s : rig.surfaces)
+        for (const auto& v : s.vertices) {
+            ++vertexCount;
+            const auto top =
+                std::max_element(v.influences.begin(), v.influences.end(),
+                                 [](const RigInfluence& a, const RigInfluence& b) { return a.weight < b.weight; });
+            if (top != v.influences.end() && !skipped[static_cast<std::size_t>(top->joint)])
+                owned[static_cast<std::size_t>(top->joint)].push_back(v.position);
+        }
+    const int minVertices =
+        std::max(rules.minVertices,
+                 static_cast<int>(std::ceil(rules.minVertexFraction * static_cast<double>(vertexCount))));
+
+    // group[j]: the joint heading j's body. Named merges first (parents before children) …
+    std::vector<int> group(static_cast<std::size_t>(n));
+    std::vector<bool> kept(static_cast<std::size_t>(n), false);
+    for (int j = 0; j < n; ++j) {
+        const std::string& name = rig.joints[static_cast<std::size_t>(j)].name;
+        const int parent = rig.joints[static_cast<std::size_t>(j)].parent;
+        kept[static_cast<std::size_t>(j)] = matchesAny(keepRe, name);
+        group[static_cast<std::size_t>(j)] = j;
+        if (parent >= 0 && !kept[static_cast<std::size_t>(j)] &&
+            (matchesAny(mergeRe, name) || skipped[static_cast<std::size_t>(j)]))
+            group[static_cast<std::size_t>(j)] = group[static_cast<std::size_t>(parent)];
+    }
+    const auto pointsOf = [&](int head) {
+        std::vector<Eigen::Vector3d> pts;
+        for (int j = 0; j < n; ++j)
+            if (group[static_cast<std::size_t>(j)] == head)
+                pts.insert(pts.end(), owned[static_cast<std::size_t>(j)].begin(),
+                           owned[static_cast<std::size_t>(j)].end());
+        return pts;
+    };
+    const auto mergeInto = [&](int from, int into) {
+        for (int& g : group)
+            if (g == from) g = into;
+    };
+    // … then small groups into their parent's, children before parents so that what they gather counts. A group's
+    // size is the larger of its vertices' extent and its bone's length (head to the farthest joint below it).
+    const auto boneLength = [&](int head) {
+        double length = 0;
+        for (int j = head + 1; j < n; ++j) {
+            const int parent = rig.joints[static_cast<std::size_t>(j)].parent;
+            if (parent >= 0 && group[static_cast<std::size_t>(parent)] == head)
+                length = std::max(length, (rig.joints[static_cast<std::size_t>(j)].bind.position -
+                                           rig.joints[static_cast<std::size_t>(head)].bind.position)
+                                              .norm());
+        }
+        return length;
+    };
+    for (int j = n - 1; j >= 1; --j) {
+        if (group[static_cast<std::size_t>(j)] != j || kept[static_cast<std::size_t>(j)]) continue;
+        const auto pts = pointsOf(j);
+        if (static_cast<int>(pts.size()) < minVertices ||
+            std::max(extentOf(pts), boneLength(j)) < rules.minBodyFraction * height)
+            mergeInto(j, group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)]);
+    }
+    // The base body holds joint 0; while it has too few vertices it takes in the child group whose subtree holds
+    // the most joints (the torso: Doom's base body is the pelvis, af-format §2.4).
+    const auto subtreeSize = [&](int j) {
+        int k = j + 1;
+        while (k < n && rig.joints[static_cast<std::size_t>(k)].parent >= j) ++k;
+        return k - j;
+    };
+    while (static_cast<int>(pointsOf(0).size()) < std::max(minVertices, 1)) {
+        int bestChild = -1;
+        for (int j = 1; j < n; ++j)
+            if (group[static_cast<std::size_t>(j)] == j &&
+                group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)] == 0 &&
+                (bestChild < 0 || subtreeSize(j) > subtreeSize(bestChild)))
+                bestChild = j;
+        if (bestChild < 0) break;
+        mergeInto(bestChild, 0);
+    }
+
+    // Bodies in joint order of their heads; the base body first.
+    std::vector<BodyFit> bodies;
+    std::map<int, int> bodyOfHead;
+    for (int j = 0; j < n; ++j)
+        if (group[static_cast<std::size_t>(j)] == j) {
+            bodyOfHead[j] = static_cast<int>(bodies.size());
+            BodyFit b;
+            b.head = j;
+            bodies.push_back(b);
+        }
+    for (int j = 0; j < n; ++j) {
+        BodyFit& b = bodies[static_cast<std::size_t>(bodyOfHead.at(group[static_cast<std::size_t>(j)]))];
+        b.joints.push_back(j);
+        b.points.insert(b.points.end(), owned[static_cast<std::size_t>(j)].begin(),
+                        owned[static_cast<std::size_t>(j)].end());
+    }
+    for (BodyFit& b : bodies) {
+        std::size_t most = 0;
+        b.mainJoint = b.head;
+        for (int j : b.joints)
+            if (owned[static_cast<std::size_t>(j)].size() > most) {
+                most = owned[static_cast<std::size_t>(j)].size();
+                b.mainJoint = j;
+            }
+    }
+    for (BodyFit& b : bodies)
+        if (b.head > 0)
+            b.parentBody =
+                bodyOfHead.at(group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)]);
+
+    // Frames: Z along the bone (toward the one child body, else the farthest joint of the group), X and Y the
+    // principal axes of the vertices across it; without a bone, the principal axes alone.
+    const double minThickness = 0.02 * height;
+    for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
+        BodyFit& b = bodies[bi];
+        const Eigen::Vector3d head = rig.joints[static_cast<std::size_t>(b.head)].bind.position;
+        std::vector<int> children;
+        for (std::size_t ci = 0; ci < bodies.size(); ++ci)
+            if (bodies[ci].parentBody == static_cast<int>(bi)) children.push_back(static_cast<int>(ci));
+        std::optional<Eigen::Vector3d> tail;
+        if (b.head > 0) {
+            if (children.size() == 1) {
+                tail = rig.joints[static_cast<std::size_t>(bodies[static_cast<std::size_t>(children[0])].head)]
+                           .bind.position;
+            } else if (children.empty()) {
+                double far = 0;
+                for (int j : b.joints) {
+                    const Eigen::Vector3d p = rig.joints[static_cast<std::size_t>(j)].bind.position;
+                    if ((p - head).norm() > far) {
+                        far = (p - head).norm();
+                        tail = p;
+                    }
+                }
+            }
+        }
+        if (b.points.size() < 4) {
+            // A kept bone without vertices (a head modelled apart, as Doom's def_head): a cube a tenth of the
+            // model's height, beyond the joint along the bone from its parent.
+            Eigen::Vector3d d = Eigen::Vector3d::UnitZ();
+            if (b.parentBody >= 0) {
+                const Eigen::Vector3d from =
+                    rig.joints[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)]
+                        .bind.position;
+                if ((head - from).norm() > 1e-6 * height) d = (head - from).normalized();
+            }
+            const double side = 0.1 * height;
+            b.frame.col(2) = d;
+            b.frame.col(0) = perpendicular(d, Eigen::Vector3d::UnitX());
+            b.frame.col(1) = d.cross(b.frame.col(0));
+            b.centre = head + d * (side / 2);
+            b.halfExtents = Eigen::Vector3d::Constant(side / 2);
+            for (int k = 0; k < 8; ++k)
+                b.points.push_back(b.centre + b.frame * Eigen::Vector3d(k & 1 ? side / 2 : -side / 2,
+                                                                        k & 2 ? side / 2 : -side / 2,
+                                                                        k & 4 ? side / 2 : -side / 2));
+        }
+        const Eigen::Matrix3d pca = principalAxes(b.points);
+        Eigen::Vector3d d = pca.col(0);
+        if (tail && (*tail - head).norm() > 1e-3 * height) d = (*tail - head).normalized();
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const auto& p : b.points) mean += p;
+        mean /= static_cast<double>(b.points.size());
+        if (!tail && d.dot(mean - head) < 0) d = -d;
+        const Eigen::Vector3d x = perpendicular(d, pca.col(0).cross(d).norm() > 0.3 ? pca.col(0) : pca.col(1));
+        b.frame.col(0) = x;
+        b.frame.col(1) = d.cross(x);
+        b.frame.col(2) = d;
+        // Bounds in that frame: the vertices, and along the bone from the head to the child's head.
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+        for (const auto& p : b.points) {
+            const Eigen::Vector3d q = b.frame.transpose() * (p - head);
+            lo = lo.cwiseMin(q);
+            hi = hi.cwiseMax(q);
+        }
+        if (tail && b.head > 0 && children.size() == 1) {
+            lo.z() = std::min(lo.z(), 0.0);
+            hi.z() = std::max(hi.z(), d.dot(*tail - head));
+        }
+        Eigen::Vector3d half = (hi - lo) / 2;
+        const double thickness = std::max(minThickness, 0.15 * 2 * half.maxCoeff());
+        for (int k = 0; k < 3; ++k) half(k) = std::max(half(k), thickness / 2);
+        b.centre = head + b.frame * ((lo + hi) / 2);
+        b.halfExtents = half;
+        fitShape(b, rules.shapes);
+        b.direction = (b.centre - head).norm() > 1e-6 * height ? Eigen::Vector3d((b.centre - head).normalized()) : d;
+    }
+    return bodies;
+}
+
+} // namespace afb::gen::detail
