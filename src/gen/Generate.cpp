@@ -233,41 +233,34 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     }
     out.totalMassKg = mass;
 
-    // Build the figure as the runtime will, and turn self-collision off for the smaller of every pair of bodies
-    // that touch at the bind pose (as the hand-made figures do for upper arms against the chest).
+    // Self-collision off for the smaller of every pair of bodies that touch at the bind pose (as the hand-made
+    // figures do for the upper arms against the chest).
     text::Diagnostics skeletonDiags;
     const auto skeleton = figure::Skeleton::build(out.mesh, out.afPose, out.modelOffset, skeletonDiags, options.name);
     if (!skeleton) {
         diagnostics.append(skeletonDiags);
         return std::nullopt;
     }
-    for (int round = 0;; ++round) {
-        text::Diagnostics findings;
-        figure::FigureInput input;
-        input.decl = &af;
-        input.skeleton = &*skeleton;
-        const auto fig = figure::buildFigure(input, findings);
-        if (!fig) {
-            diagnostics.append(findings);
-            diagnostics.error(where, "the generated figure does not build (see above)");
-            return std::nullopt;
-        }
-        bool changed = false;
-        for (const auto& [a, b] : figure::selfCollisionPairs(*fig)) {
-            if (figure::separation(fig->bodies[static_cast<std::size_t>(a)],
-                                   fig->bodies[static_cast<std::size_t>(b)]) >= figure::kTouchToleranceM)
-                continue;
-            const std::size_t smaller =
-                fits[static_cast<std::size_t>(a)].volume <= fits[static_cast<std::size_t>(b)].volume
-                    ? static_cast<std::size_t>(a)
-                    : static_cast<std::size_t>(b);
-            if (!af.bodies[smaller].selfCollision.value_or(true)) continue;
-            af.bodies[smaller].selfCollision = false;
-            changed = true;
-            break; // one at a time: the pairs change
-        }
-        if (!changed || round > static_cast<int>(af.bodies.size())) break;
+    // Build the figure once, as the runtime will; the flags changed below change nothing else in it.
+    text::Diagnostics findings;
+    figure::FigureInput input;
+    input.decl = &af;
+    input.skeleton = &*skeleton;
+    auto fig = figure::buildFigure(input, findings);
+    if (!fig) {
+        diagnostics.append(findings);
+        diagnostics.error(where, "the generated figure does not build (see above)");
+        return std::nullopt;
     }
+    for (const auto& [a, b] : figure::selfCollisionPairs(*fig)) {
+        const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
+        if (!af.bodies[ia].selfCollision.value_or(true) || !af.bodies[ib].selfCollision.value_or(true)) continue;
+        if (figure::separation(fig->bodies[ia], fig->bodies[ib]) >= figure::kTouchToleranceM) continue;
+        const std::size_t smaller = fits[ia].volume <= fits[ib].volume ? ia : ib;
+        af.bodies[smaller].selfCollision = false;
+        fig->bodies[smaller].selfCollision = false;
+    }
+    out.figure = std::move(fig);
     return out;
 }
 

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "afb/decl/Af.h"
+#include "afb/figure/Figure.h"
 #include "afb/gen/Rig.h"
 #include "afb/text/Diagnostics.h"
 
@@ -105,6 +106,8 @@ struct Generated {
     std::vector<GeneratedBody> bodies;
     std::vector<GeneratedJoint> joints;
     double totalMassKg = 0;
+    /// The figure built from `af` on the written skeleton (default units), as loading the folder gives it.
+    std::optional<figure::Figure> figure;
 };
 
 /// Fits bodies and joints to `rig`. Errors (nothing to fit, a figure the figure layer refuses) in `diagnostics`.
