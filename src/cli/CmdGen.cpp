@@ -1,6 +1,11 @@
 // afb gen MODEL --out DIR: a ragdoll figure from a rigged mesh (issue 14), written as a content folder.
+#include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <iostream>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "Commands.h"
 #include "afb/gen/Generate.h"
@@ -20,20 +25,107 @@ const char* shapeName(decl::ShapeKind k) {
     return "?";
 }
 
+struct GenCliOptions {
+    std::filesystem::path model, out, rules;
+    std::string name;
+    std::optional<double> massKg, unitM, heightM;
+    std::string up;
+    bool json = false;
+};
+
+int runGen(const GenCliOptions& opt) {
+    text::Diagnostics diags;
+    gen::GenOptions options;
+    options.name = opt.name.empty() ? gen::figureNameFor(opt.model) : opt.name;
+    options.massKg = opt.massKg;
+    if (!opt.rules.empty()) {
+        auto rules = gen::loadRules(opt.rules, diags);
+        if (!rules) {
+            printDiagnostics(diags);
+            return 1;
+        }
+        options.rules = std::move(*rules);
+    }
+    gen::ImportOptions import;
+    import.metresPerUnit = opt.unitM;
+    import.heightM = opt.heightM;
+    if (!opt.up.empty()) import.up = opt.up[0];
+    std::optional<gen::Generated> generated;
+    if (auto rig = gen::importRig(opt.model, import, diags)) generated = gen::generateFigure(*rig, options, diags);
+    if (generated && !gen::writeContent(*generated, opt.out, diags)) generated.reset();
+    printDiagnostics(diags);
+    if (!generated) {
+        return 1;
+    }
+    const gen::ContentPaths paths = gen::contentPaths(generated->name);
+    if (opt.json) {
+        nlohmann::json bodies = nlohmann::json::array(), joints = nlohmann::json::array();
+        for (const auto& b : generated->bodies)
+            bodies.push_back({{"name", b.name},
+                              {"joint", b.joint},
+                              {"shape", shapeName(b.shape)},
+                              {"massKg", b.massKg},
+                              {"vertices", b.vertices},
+                              {"joints", b.joints.size()}});
+        for (const auto& j : generated->joints)
+            joints.push_back({{"name", j.name},
+                              {"role", j.role},
+                              {"body1", generated->bodies[static_cast<std::size_t>(j.body1)].name},
+                              {"body2", generated->bodies[static_cast<std::size_t>(j.body2)].name}});
+        std::cout << nlohmann::json{{"name", generated->name},
+                                    {"totalMassKg", generated->totalMassKg},
+                                    {"files", {paths.af, paths.def, paths.mesh, paths.afPose}},
+                                    {"bodies", bodies},
+                                    {"constraints", joints}}
+                         .dump(2)
+                  << "\n";
+        return 0;
+    }
+    std::printf("figure %s: %zu bodies, %zu constraints, %zu md5 joints, total mass %.1f kg\n", generated->name.c_str(),
+                generated->bodies.size(), generated->joints.size(), generated->mesh.joints.size(),
+                generated->totalMassKg);
+    for (const auto& b : generated->bodies)
+        std::printf("  body %-16s %-12s %6.2f kg  %5d vertices  %zu joints\n", b.name.c_str(), shapeName(b.shape),
+                    b.massKg, b.vertices, b.joints.size());
+    for (const auto& j : generated->joints)
+        std::printf("  joint %-15s %-9s %s - %s\n", j.name.c_str(), j.role.empty() ? "(default)" : j.role.c_str(),
+                    generated->bodies[static_cast<std::size_t>(j.body1)].name.c_str(),
+                    generated->bodies[static_cast<std::size_t>(j.body2)].name.c_str());
+    std::printf("wrote %s/{%s, %s, %s, %s}\n", opt.out.string().c_str(), paths.af.c_str(), paths.def.c_str(),
+                paths.mesh.c_str(), paths.afPose.c_str());
+    return 0;
+}
+
+// assimp 5.2.5 crashes on some malformed files (inside its parsers, before anything can be checked): a model that
+// is not an md5mesh is imported in a child process, so such a crash is an error message, not a crash of afb.
+int runIsolated(const GenCliOptions& opt) {
+    std::cout.flush();
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) return runGen(opt);
+    if (pid == 0) {
+        const int code = runGen(opt);
+        std::cout.flush();
+        std::cerr.flush();
+        std::fflush(nullptr);
+        ::_exit(code);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return 1;
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    std::cerr << opt.model.string() << ": error: the importer crashed on this file (signal "
+              << (WIFSIGNALED(status) ? WTERMSIG(status) : 0) << "): the file is malformed or not supported\n";
+    return 1;
+}
+
 } // namespace
 
 void addGenCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand(
         "gen", "Generate a ragdoll figure from a rigged mesh (.md5mesh, or any format assimp reads: FBX, glTF/GLB, "
                "Collada, X, B3D, ...): writes DIR/af/N.af, DIR/def/N.def and DIR/models/md5/N/ (mesh and af_pose)");
-    struct Options {
-        std::filesystem::path model, out, rules;
-        std::string name;
-        std::optional<double> massKg, unitM, heightM;
-        std::string up;
-        bool json = false;
-    };
-    auto opt = std::make_shared<Options>();
+    auto opt = std::make_shared<GenCliOptions>();
     cmd->add_option("model", opt->model, "The rigged mesh")->required();
     cmd->add_option("--out", opt->out, "Content folder to write into (created when missing)")->required();
     cmd->add_option("--name", opt->name,
@@ -52,67 +144,9 @@ void addGenCommand(CLI::App& app, int& exitCode) {
         ->check(CLI::IsMember({"y", "z"}));
     cmd->add_flag("--json", opt->json, "Print the generated bodies and joints as JSON on stdout");
     cmd->callback([opt, &exitCode] {
-        text::Diagnostics diags;
-        gen::GenOptions options;
-        options.name = opt->name.empty() ? gen::figureNameFor(opt->model) : opt->name;
-        options.massKg = opt->massKg;
-        if (!opt->rules.empty()) {
-            auto rules = gen::loadRules(opt->rules, diags);
-            if (!rules) {
-                printDiagnostics(diags);
-                exitCode = 1;
-                return;
-            }
-            options.rules = std::move(*rules);
-        }
-        gen::ImportOptions import;
-        import.metresPerUnit = opt->unitM;
-        import.heightM = opt->heightM;
-        if (!opt->up.empty()) import.up = opt->up[0];
-        std::optional<gen::Generated> generated;
-        if (auto rig = gen::importRig(opt->model, import, diags)) generated = gen::generateFigure(*rig, options, diags);
-        if (generated && !gen::writeContent(*generated, opt->out, diags)) generated.reset();
-        printDiagnostics(diags);
-        if (!generated) {
-            exitCode = 1;
-            return;
-        }
-        const gen::ContentPaths paths = gen::contentPaths(generated->name);
-        if (opt->json) {
-            nlohmann::json bodies = nlohmann::json::array(), joints = nlohmann::json::array();
-            for (const auto& b : generated->bodies)
-                bodies.push_back({{"name", b.name},
-                                  {"joint", b.joint},
-                                  {"shape", shapeName(b.shape)},
-                                  {"massKg", b.massKg},
-                                  {"vertices", b.vertices},
-                                  {"joints", b.joints.size()}});
-            for (const auto& j : generated->joints)
-                joints.push_back({{"name", j.name},
-                                  {"role", j.role},
-                                  {"body1", generated->bodies[static_cast<std::size_t>(j.body1)].name},
-                                  {"body2", generated->bodies[static_cast<std::size_t>(j.body2)].name}});
-            std::cout << nlohmann::json{{"name", generated->name},
-                                        {"totalMassKg", generated->totalMassKg},
-                                        {"files", {paths.af, paths.def, paths.mesh, paths.afPose}},
-                                        {"bodies", bodies},
-                                        {"constraints", joints}}
-                             .dump(2)
-                      << "\n";
-            return;
-        }
-        std::printf("figure %s: %zu bodies, %zu constraints, %zu md5 joints, total mass %.1f kg\n",
-                    generated->name.c_str(), generated->bodies.size(), generated->joints.size(),
-                    generated->mesh.joints.size(), generated->totalMassKg);
-        for (const auto& b : generated->bodies)
-            std::printf("  body %-16s %-12s %6.2f kg  %5d vertices  %zu joints\n", b.name.c_str(), shapeName(b.shape),
-                        b.massKg, b.vertices, b.joints.size());
-        for (const auto& j : generated->joints)
-            std::printf("  joint %-15s %-9s %s - %s\n", j.name.c_str(), j.role.empty() ? "(default)" : j.role.c_str(),
-                        generated->bodies[static_cast<std::size_t>(j.body1)].name.c_str(),
-                        generated->bodies[static_cast<std::size_t>(j.body2)].name.c_str());
-        std::printf("wrote %s/{%s, %s, %s, %s}\n", opt->out.string().c_str(), paths.af.c_str(), paths.def.c_str(),
-                    paths.mesh.c_str(), paths.afPose.c_str());
+        std::string ext = opt->model.extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        exitCode = ext == ".md5mesh" ? runGen(*opt) : runIsolated(*opt);
     });
 }
 

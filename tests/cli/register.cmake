@@ -41,6 +41,10 @@ file(GLOB _afb_goldens CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/golden/*.js
 if(_afb_goldens)
   afb_cli_test(golden_compare 0 ARGS golden compare ${_afb_goldens})
 endif()
+# afb gen: a content folder from the bundled humanoid's mesh that inspect, fmt --check and drop accept.
+add_test(NAME cli.gen_humanoid
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/gen_humanoid" -P ${CMAKE_CURRENT_LIST_DIR}/gen.cmake)
 # afb drop: the spawn pose with --steps 0, a JSON report, and a real drop of the bundled chain.
 afb_cli_test(drop_chain 0 ARGS drop --base . chain --seconds 2 MATCH "chain" "Bullet 3")
 afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"steps\": 0" "\"final_pose\"" "\"us_per_step\"")

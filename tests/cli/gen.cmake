@@ -1,0 +1,42 @@
+# cmake -P test of `afb gen` (AFB, SRC, TMP given): a figure generated from the bundled humanoid's mesh is a content
+# folder that `afb inspect` reads with no error, whose .af is canonical (`afb fmt --check`) and that `afb drop`
+# drops; bad rules and bad models are errors with a message.
+file(REMOVE_RECURSE "${TMP}")
+file(MAKE_DIRECTORY "${TMP}")
+
+function(run expect_rc out_var)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc STREQUAL expect_rc)
+    message(FATAL_ERROR "${ARGN}\nexit ${rc}, expected ${expect_rc}\n${out}\n${err}")
+  endif()
+  set(${out_var} "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+run(0 out "${AFB}" gen "${SRC}/models/md5/humanoid/humanoid.md5mesh" --out "${TMP}/content" --name hum --mass 80 --json)
+if(NOT out MATCHES "\"name\": \"hum\"" OR NOT out MATCHES "\"totalMassKg\": 80" OR NOT out MATCHES "\"role\": \"knee\"")
+  message(FATAL_ERROR "unexpected afb gen --json output:\n${out}")
+endif()
+foreach(f af/hum.af def/hum.def models/md5/hum/hum.md5mesh models/md5/hum/af_pose.md5anim)
+  if(NOT EXISTS "${TMP}/content/${f}")
+    message(FATAL_ERROR "afb gen did not write ${f}")
+  endif()
+endforeach()
+run(0 out "${AFB}" inspect --base "${TMP}/content" hum)
+if(out MATCHES "error:")
+  message(FATAL_ERROR "afb inspect reports errors on the generated figure:\n${out}")
+endif()
+run(0 out "${AFB}" fmt --check "${TMP}/content/af/hum.af")
+run(0 out "${AFB}" parse "${TMP}/content/def/hum.def" "${TMP}/content/models/md5/hum/hum.md5mesh"
+    "${TMP}/content/models/md5/hum/af_pose.md5anim")
+run(0 out "${AFB}" drop --base "${TMP}/content" hum --steps 60)
+
+file(WRITE "${TMP}/rules.json" "{\"merge\": [\"(unclosed\"]}")
+run(1 out "${AFB}" gen "${SRC}/models/md5/humanoid/humanoid.md5mesh" --out "${TMP}/bad" --rules "${TMP}/rules.json")
+if(NOT out MATCHES "rules.json: error: bad regular expression")
+  message(FATAL_ERROR "a bad rules file was not reported:\n${out}")
+endif()
+file(WRITE "${TMP}/broken.glb" "glTF not really")
+run(1 out "${AFB}" gen "${TMP}/broken.glb" --out "${TMP}/bad")
+if(NOT out MATCHES "broken.glb: error:")
+  message(FATAL_ERROR "a broken model was not reported:\n${out}")
+endif()
