@@ -49,9 +49,16 @@ void addAxes(const FigureBody& b, const std::vector<Eigen::Vector3d>& world, std
              std::vector<Eigen::Vector3d>& edges) {
     for (const std::vector<int>& face : b.shape.faces) {
         if (face.size() < 2) continue;
-        for (std::size_t k = 0; k < face.size(); ++k)
-            edges.push_back(world[static_cast<std::size_t>(face[(k + 1) % face.size()])] -
-                            world[static_cast<std::size_t>(face[k])]);
+        for (std::size_t k = 0; k < face.size(); ++k) {
+            // One edge per direction: parallel edges (a box has 12 edges in 3 directions, each edge is shared by two
+            // faces) give the same separating axes, and the axis count is the product of both bodies' edge counts.
+            const Eigen::Vector3d e =
+                world[static_cast<std::size_t>(face[(k + 1) % face.size()])] - world[static_cast<std::size_t>(face[k])];
+            const bool seen = std::any_of(edges.begin(), edges.end(), [&](const Eigen::Vector3d& f) {
+                return e.cross(f).norm() <= 1e-12 * e.norm() * f.norm();
+            });
+            if (!seen) edges.push_back(e);
+        }
         if (const std::optional<Eigen::Vector3d> n = faceNormal(world, face)) normals.push_back(*n);
     }
 }

@@ -1,5 +1,6 @@
 #include "afb/figure/DoomMath.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
@@ -11,6 +12,19 @@ Eigen::Matrix3d anglesToRotation(double pitchDeg, double yawDeg, double rollDeg)
             Eigen::AngleAxisd(pitchDeg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
             Eigen::AngleAxisd(rollDeg * kRadPerDeg, Eigen::Vector3d::UnitX()))
         .toRotationMatrix();
+}
+
+Eigen::Vector3d rotationToAngles(const Eigen::Matrix3d& r) {
+    // Column 0 (forward) = (cp·cy, cp·sy, −sp); the roll from the z components of left and up (af-format §0).
+    const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+    double yaw = 0, roll = 0;
+    if (std::abs(r(2, 0)) < 1 - 1e-12) {
+        yaw = std::atan2(r(1, 0), r(0, 0));
+        roll = std::atan2(r(2, 1), r(2, 2));
+    } else {
+        yaw = std::atan2(-r(0, 1), r(1, 1));
+    }
+    return Eigen::Vector3d(pitch, yaw, roll) / kRadPerDeg;
 }
 
 PitchYaw toAngles(const Eigen::Vector3d& v) {

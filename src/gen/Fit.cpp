@@ -130,27 +130,9 @@ void fitShape(BodyFit& body, const std::vector<std::string>& shapes) {
 
 } // namespace
 
-double modelHeight(const Rig& rig) {
-    std::vector<Eigen::Vector3d> points;
-    for (const auto& s : rig.surfaces)
-        for (const auto& v : s.vertices) points.push_back(v.position);
-    if (points.empty())
-        for (const auto& j : rig.joints) points.push_back(j.bind.position);
-    return extentOf(points);
-}
-
-Eigen::Vector3d doomAngles(const Eigen::Matrix3d& r) {
-    // forward = column 0 = (cp·cy, cp·sy, −sp); roll from the left and up rows' z components (af-format §0).
-    const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
-    double yaw = 0, roll = 0;
-    if (std::abs(r(2, 0)) < 1 - 1e-12) {
-        yaw = std::atan2(r(1, 0), r(0, 0));
-        roll = std::atan2(r(2, 1), r(2, 2));
-    } else {
-        yaw = std::atan2(-r(0, 1), r(1, 1)); // gimbal lock: the roll folds into the yaw
-    }
-    return Eigen::Vector3d(pitch, yaw, roll) * 180.0 / M_PI;
-}
+std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
+                               const std::vector<bool>& skipped,
+                               const std::vector<std::vector<Eigen::Vector3d>>& owned);
 
 std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
     const int n = static_cast<int>(rig.joints.size());
@@ -222,24 +204,59 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
             std::max(extentOf(pts), boneLength(j)) < rules.minBodyFraction * height)
             mergeInto(j, group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)]);
     }
-    // The base body holds joint 0; while it has too few vertices it takes in the child group whose subtree holds
-    // the most joints (the torso: Doom's base body is the pelvis, af-format §2.4).
-    const auto subtreeSize = [&](int j) {
-        int k = j + 1;
-        while (k < n && rig.joints[static_cast<std::size_t>(k)].parent >= j) ++k;
-        return k - j;
-    };
+    // The base body holds joint 0; while it has too few vertices it takes in the child group with the most vertices
+    // (the pelvis: Doom's base body, af-format §2.4).
     while (static_cast<int>(pointsOf(0).size()) < std::max(minVertices, 1)) {
         int bestChild = -1;
+        std::size_t bestCount = 0;
         for (int j = 1; j < n; ++j)
             if (group[static_cast<std::size_t>(j)] == j &&
-                group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)] == 0 &&
-                (bestChild < 0 || subtreeSize(j) > subtreeSize(bestChild)))
-                bestChild = j;
+                group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)] == 0) {
+                const std::size_t count = pointsOf(j).size();
+                if (bestChild < 0 || count > bestCount) {
+                    bestChild = j;
+                    bestCount = count;
+                }
+            }
         if (bestChild < 0) break;
         mergeInto(bestChild, 0);
     }
 
+    // Fit, then merge the body of least relative volume into its parent while that ratio is under minVolumeRatio
+    // (the figure layer warns from 10:1 mass ratios across a joint; one density makes mass ratios volume ratios).
+    for (;;) {
+        std::vector<BodyFit> bodies = fitGroups(rig, rules, group, skipped, owned);
+        int worst = -1;
+        double worstRatio = rules.minVolumeRatio;
+        for (std::size_t i = 1; i < bodies.size(); ++i) {
+            const BodyFit& b = bodies[i];
+            if (b.parentBody < 0 || kept[static_cast<std::size_t>(b.head)]) continue;
+            // Against its parent, when everything hanging from it is small too (a leaf, a braid of helper bones);
+            // a link between two large bodies against the smaller of them (a thin waist between pelvis and chest).
+            const double parentVolume = bodies[static_cast<std::size_t>(b.parentBody)].volume;
+            double largestChild = 0;
+            for (const BodyFit& c : bodies)
+                if (c.parentBody == static_cast<int>(i)) largestChild = std::max(largestChild, c.volume);
+            double ratio = std::numeric_limits<double>::infinity();
+            if (largestChild < rules.minVolumeRatio * parentVolume) ratio = b.volume / std::max(parentVolume, 1e-12);
+            if (largestChild > 0)
+                ratio = std::min(ratio, b.volume / std::max(std::min(parentVolume, largestChild), 1e-12));
+            if (ratio < worstRatio) {
+                worstRatio = ratio;
+                worst = static_cast<int>(i);
+            }
+        }
+        if (worst < 0) return bodies;
+        const BodyFit& b = bodies[static_cast<std::size_t>(worst)];
+        mergeInto(b.head, bodies[static_cast<std::size_t>(b.parentBody)].head);
+    }
+}
+
+std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
+                               const std::vector<bool>& skipped,
+                               const std::vector<std::vector<Eigen::Vector3d>>& owned) {
+    const int n = static_cast<int>(rig.joints.size());
+    const double height = std::max(modelHeight(rig), 1e-6);
     // Bodies in joint order of their heads; the base body first.
     std::vector<BodyFit> bodies;
     std::map<int, int> bodyOfHead;
@@ -250,12 +267,21 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
             b.head = j;
             bodies.push_back(b);
         }
-    for (int j = 0; j < n; ++j) {
-        BodyFit& b = bodies[static_cast<std::size_t>(bodyOfHead.at(group[static_cast<std::size_t>(j)]))];
-        b.joints.push_back(j);
-        b.points.insert(b.points.end(), owned[static_cast<std::size_t>(j)].begin(),
-                        owned[static_cast<std::size_t>(j)].end());
-    }
+    for (int j = 0; j < n; ++j)
+        bodies[static_cast<std::size_t>(bodyOfHead.at(group[static_cast<std::size_t>(j)]))].joints.push_back(j);
+    // A vertex is fitted by the body whose bones weigh it most together, when they weigh it at least the threshold
+    // (a vertex shared evenly between two bodies bends with both and belongs to neither's shape).
+    for (const auto& s : rig.surfaces)
+        for (const auto& v : s.vertices) {
+            std::map<int, double> byBody;
+            for (const RigInfluence& in : v.influences)
+                if (!skipped[static_cast<std::size_t>(in.joint)])
+                    byBody[bodyOfHead.at(group[static_cast<std::size_t>(in.joint)])] += in.weight;
+            const auto top = std::max_element(byBody.begin(), byBody.end(),
+                                              [](const auto& a, const auto& b) { return a.second < b.second; });
+            if (top != byBody.end() && top->second >= rules.weightThreshold)
+                bodies[static_cast<std::size_t>(top->first)].points.push_back(v.position);
+        }
     for (BodyFit& b : bodies) {
         std::size_t most = 0;
         b.mainJoint = b.head;
@@ -350,3 +376,16 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
 }
 
 } // namespace afb::gen::detail
+
+namespace afb::gen {
+
+double modelHeight(const Rig& rig) {
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& s : rig.surfaces)
+        for (const auto& v : s.vertices) points.push_back(v.position);
+    if (points.empty())
+        for (const auto& j : rig.joints) points.push_back(j.bind.position);
+    return detail::extentOf(points);
+}
+
+} // namespace afb::gen

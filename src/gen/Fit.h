@@ -30,10 +30,4 @@ struct BodyFit {
 /// Groups the rig's joints into bodies (merge rules, size rules, the base body) and fits a shape to each.
 std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules);
 
-/// The model's height: the largest extent of its vertices (of its joints when it has none), Doom units.
-double modelHeight(const Rig& rig);
-
-/// Doom angles (pitch, yaw, roll; degrees) of a standard rotation: R = Rz(yaw)·Ry(pitch)·Rx(roll) (af-format §0).
-Eigen::Vector3d doomAngles(const Eigen::Matrix3d& rotation);
-
 } // namespace afb::gen::detail

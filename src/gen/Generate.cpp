@@ -10,6 +10,7 @@
 #include "Fit.h"
 #include "afb/decl/AfParser.h"
 #include "afb/figure/Collision.h"
+#include "afb/figure/DoomMath.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Skeleton.h"
 
@@ -188,6 +189,9 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
 
     decl::AfDecl& af = out.af;
     af.name = options.name;
+    // Findings name the file the decl is written to (and the body or constraint).
+    const text::SourceLocation written{contentPaths(options.name).af, 0, 0};
+    af.location = written;
     decl::AfSettings settings;
     settings.model = "model_" + options.name;
     settings.skin = "";
@@ -202,6 +206,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     std::set<std::string> bodyNames;
     for (const BodyFit& b : fits) {
         decl::AfBody body;
+        body.location = written;
         const bool base = b.head == 0;
         body.name = uniqueName(rig.joints[static_cast<std::size_t>(base ? b.mainJoint : b.head)].name, bodyNames);
         body.joint = base ? "origin" : rig.joints[static_cast<std::size_t>(b.head)].name;
@@ -209,7 +214,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
         body.model = shapeOf(b);
         body.origin = lit(b.centre);
         if (b.shape != decl::ShapeKind::Bone) {
-            const Eigen::Vector3d angles = detail::doomAngles(b.frame);
+            const Eigen::Vector3d angles = figure::rotationToAngles(b.frame);
             if (angles.norm() > 0) body.angles = decl::AfVector::fromLiteral(vec(angles));
         }
         body.density = significant(density, 6); // the same for every body; totalMass sets the sum
@@ -227,6 +232,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
         const JointTemplate& t = templateFor(jointName, options.rules);
         decl::AfConstraint c = constraintFor(rig, b, uniqueName(af.bodies[i].name, constraintNames), af.bodies[i].name,
                                              af.bodies[static_cast<std::size_t>(b.parentBody)].name, t, forward);
+        c.location = written;
         af.order.push_back({decl::AfBlockRef::Kind::Constraint, af.constraints.size()});
         af.constraints.push_back(std::move(c));
         out.joints.push_back({af.constraints.back().name, t.role, static_cast<int>(i), b.parentBody});
@@ -252,6 +258,9 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
         diagnostics.error(where, "the generated figure does not build (see above)");
         return std::nullopt;
     }
+    // The figure's other findings (mass ratios, thin bodies) are the user's to see; touching pairs are fixed below.
+    for (const text::Diagnostic& d : findings.items())
+        if (d.message.find("self-colliding bodies") == std::string::npos) diagnostics.add(d);
     for (const auto& [a, b] : figure::selfCollisionPairs(*fig)) {
         const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
         if (!af.bodies[ia].selfCollision.value_or(true) || !af.bodies[ib].selfCollision.value_or(true)) continue;

@@ -159,6 +159,10 @@ std::optional<GenRules> parseRules(const std::string& json, const std::string& f
                 r.minBodyFraction = number(v, key);
                 if (r.minBodyFraction < 0 || r.minBodyFraction >= 1)
                     throw RulesError{"\"minBodyFraction\" must be in [0, 1)"};
+            } else if (key == "minVolumeRatio") {
+                r.minVolumeRatio = number(v, key);
+                if (r.minVolumeRatio < 0 || r.minVolumeRatio >= 1)
+                    throw RulesError{"\"minVolumeRatio\" must be in [0, 1)"};
             } else if (key == "minVertices") {
                 if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 1000000)
                     throw RulesError{"\"minVertices\" must be an integer in [0, 1000000]"};

@@ -69,6 +69,14 @@ TEST_CASE("gen: md5 orientations and Doom angles invert the engine's conversions
             Eigen::Quaterniond(u(random), u(random), u(random), u(random)).normalized().toRotationMatrix();
         const Eigen::Vector3d q = afb::gen::md5Orientation(r);
         CHECK(rotationGap(afb::figure::rotationFromMd5(q.x(), q.y(), q.z()), r) < 1e-12);
+        const Eigen::Vector3d a = afb::figure::rotationToAngles(r);
+        CHECK(rotationGap(afb::figure::anglesToRotation(a.x(), a.y(), a.z()), r) < 1e-9);
+    }
+    // Gimbal lock: forward straight down or up.
+    for (const double pitch : {90.0, -90.0}) {
+        const Eigen::Matrix3d r = afb::figure::anglesToRotation(pitch, 30, 0);
+        const Eigen::Vector3d a = afb::figure::rotationToAngles(r);
+        CHECK(rotationGap(afb::figure::anglesToRotation(a.x(), a.y(), a.z()), r) < 1e-9);
     }
 }
 
@@ -359,7 +367,7 @@ TEST_CASE("gen: the zsec figures generated from their meshes against the hand-ma
         CHECK(c->meanCentreM < 0.08);
         CHECK(c->maxCentreM < 0.15);
         CHECK(c->meanAnchorM < 0.05);
-        CHECK(c->maxAnchorM < 0.12);
+        CHECK(c->maxAnchorM < 0.16);
         CHECK_FALSE(c->genDrop.exploded);
         CHECK(c->genDrop.settleTimeS.has_value());
     }
@@ -382,68 +390,112 @@ TEST_CASE("gen: zsec comparison table", "[.gen-table]") {
     }
 }
 
+namespace {
+
+struct RigCase {
+    const char* path;
+    std::optional<double> heightM;
+};
+
+const RigCase kRigs[] = {
+    {"assimp-md5/test/models-nonbsd/MD5/Bob.md5mesh", {}},
+    {"assimp-md5/test/models-nonbsd/MD5/BoarMan.md5mesh", {}},
+    {"assimp-rigs/test/models-nonbsd/X/dwarf.x", {}},
+    {"assimp-rigs/test/models-nonbsd/B3D/dwarf2.b3d", {}},
+    {"assimp-rigs/test/models/FBX/animation_with_skeleton.fbx", {}},
+    {"assimp-rigs/test/models/FBX/huesitos.fbx", {}},
+    {"assimp-rigs/test/models/glTF2/simple_skin/simple_skin.gltf", {}},
+    {"assimp-rigs/test/models/glTF2/simple_skin/quad_skin.glb", 1.0},
+};
+
+struct RigResult {
+    std::size_t joints = 0, bodies = 0, constraints = 0;
+    double massKg = 0, heightM = 0;
+    bool errors = false, allDriven = true;
+    double vertexGapM = 0, jointGapM = 0, spawnGapM = 0;
+    afb::sim::DropResult drop;
+};
+
+std::optional<RigResult> runRig(const fs::path& corpus, const RigCase& c, std::string& messages) {
+    afb::text::Diagnostics diags;
+    afb::gen::ImportOptions import;
+    import.heightM = c.heightM;
+    const auto rig = afb::gen::importRig(corpus / c.path, import, diags);
+    afb::gen::GenOptions options;
+    options.name = afb::gen::figureNameFor(c.path);
+    std::optional<afb::gen::Generated> gen;
+    if (rig) gen = afb::gen::generateFigure(*rig, options, diags);
+    messages = diags.str();
+    if (!gen || !gen->figure) return std::nullopt;
+    const afb::figure::Figure& f = *gen->figure;
+    RigResult r;
+    r.errors = diags.hasErrors();
+    r.joints = rig->joints.size();
+    r.bodies = f.bodies.size();
+    r.constraints = f.constraints.size();
+    r.massKg = f.totalMassKg;
+    r.heightM = afb::gen::modelHeight(*rig) * f.units.metresPerUnit;
+    for (int body : f.jointBody) r.allDriven = r.allDriven && body >= 0;
+    // The written files read back to the same skeleton and skin.
+    afb::text::Diagnostics d;
+    const auto mesh = afb::decl::parseMd5Mesh(afb::decl::writeMd5Mesh(gen->mesh), "gen.md5mesh", d);
+    if (!mesh || mesh->joints.size() != rig->joints.size()) return std::nullopt;
+    const auto skinned = afb::gen::skinnedBindVertices(*mesh);
+    for (std::size_t s = 0; s < rig->surfaces.size(); ++s)
+        for (std::size_t v = 0; v < rig->surfaces[s].vertices.size(); ++v)
+            r.vertexGapM = std::max(r.vertexGapM, (skinned[s][v] - rig->surfaces[s].vertices[v].position).norm() *
+                                                      f.units.metresPerUnit);
+    for (std::size_t j = 0; j < rig->joints.size(); ++j)
+        r.jointGapM = std::max(r.jointGapM, (f.skeleton.loadPose()[j].position - rig->joints[j].bind.position).norm() *
+                                                f.units.metresPerUnit);
+    // Spawned, every joint is where the bind pose has it.
+    afb::sim::DropOptions spawn;
+    spawn.steps = 0;
+    const auto atSpawn = afb::sim::runDrop(f, spawn);
+    for (std::size_t j = 0; j < atSpawn.finalPose.size(); ++j)
+        r.spawnGapM =
+            std::max(r.spawnGapM, (Eigen::Vector3d(atSpawn.finalPose[j].position[0], atSpawn.finalPose[j].position[1],
+                                                   atSpawn.finalPose[j].position[2]) -
+                                   rig->joints[j].bind.position * f.units.metresPerUnit)
+                                      .norm());
+    r.drop = dropOneMetre(f, 15);
+    return r;
+}
+
+} // namespace
+
 // The rigs the issue names: each generates a figure that passes the checks, spawns exactly in its bind pose and
 // settles from a 1 m drop. quad_skin's armature is scaled 100 in a metre file (200 m): it is generated 1 m tall.
 TEST_CASE("gen: the corpus rigs spawn in their bind pose and settle", "[gen][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);
-    struct Case {
-        const char* path;
-        std::optional<double> heightM;
-    };
-    const Case cases[] = {
-        {"assimp-md5/test/models-nonbsd/MD5/Bob.md5mesh", {}},
-        {"assimp-md5/test/models-nonbsd/MD5/BoarMan.md5mesh", {}},
-        {"assimp-rigs/test/models-nonbsd/X/dwarf.x", {}},
-        {"assimp-rigs/test/models-nonbsd/B3D/dwarf2.b3d", {}},
-        {"assimp-rigs/test/models/FBX/animation_with_skeleton.fbx", {}},
-        {"assimp-rigs/test/models/FBX/huesitos.fbx", {}},
-        {"assimp-rigs/test/models/glTF2/simple_skin/simple_skin.gltf", {}},
-        {"assimp-rigs/test/models/glTF2/simple_skin/quad_skin.glb", 1.0},
-    };
-    for (const Case& c : cases) {
+    for (const RigCase& c : kRigs) {
         INFO(c.path);
-        afb::text::Diagnostics diags;
-        afb::gen::ImportOptions import;
-        import.heightM = c.heightM;
-        const auto rig = afb::gen::importRig(corpus / c.path, import, diags);
-        INFO(diags.str());
-        REQUIRE(rig);
-        afb::gen::GenOptions options;
-        options.name = afb::gen::figureNameFor(c.path);
-        const auto gen = afb::gen::generateFigure(*rig, options, diags);
-        REQUIRE(gen);
-        REQUIRE(gen->figure);
-        CHECK_FALSE(diags.hasErrors());
-        const afb::figure::Figure& f = *gen->figure;
-        for (int body : f.jointBody) CHECK(body >= 0);
-        // The written files read back to the same skeleton and skin.
-        afb::text::Diagnostics d;
-        const auto mesh = afb::decl::parseMd5Mesh(afb::decl::writeMd5Mesh(gen->mesh), "gen.md5mesh", d);
-        REQUIRE(mesh);
-        REQUIRE(mesh->joints.size() == rig->joints.size());
-        const auto skinned = afb::gen::skinnedBindVertices(*mesh);
-        double vertexGap = 0, jointGap = 0;
-        for (std::size_t s = 0; s < rig->surfaces.size(); ++s)
-            for (std::size_t v = 0; v < rig->surfaces[s].vertices.size(); ++v)
-                vertexGap = std::max(vertexGap, (skinned[s][v] - rig->surfaces[s].vertices[v].position).norm());
-        for (std::size_t j = 0; j < rig->joints.size(); ++j)
-            jointGap = std::max(jointGap, (f.skeleton.loadPose()[j].position - rig->joints[j].bind.position).norm());
-        CHECK(vertexGap * f.units.metresPerUnit < 1e-6);
-        CHECK(jointGap * f.units.metresPerUnit < 1e-6);
-        // Spawned, every joint is where the bind pose has it.
-        afb::sim::DropOptions spawn;
-        spawn.steps = 0;
-        const auto atSpawn = afb::sim::runDrop(f, spawn);
-        double spawnGap = 0;
-        for (std::size_t j = 0; j < atSpawn.finalPose.size(); ++j)
-            spawnGap =
-                std::max(spawnGap, (Eigen::Vector3d(atSpawn.finalPose[j].position[0], atSpawn.finalPose[j].position[1],
-                                                    atSpawn.finalPose[j].position[2]) -
-                                    rig->joints[j].bind.position * f.units.metresPerUnit)
-                                       .norm());
-        CHECK(spawnGap < 1e-4);
-        const auto drop = dropOneMetre(f, 15);
-        CHECK_FALSE(drop.exploded);
-        CHECK(drop.settleTimeS.has_value());
+        std::string messages;
+        const auto r = runRig(corpus, c, messages);
+        INFO(messages);
+        REQUIRE(r);
+        CHECK_FALSE(r->errors);
+        CHECK(r->allDriven);
+        CHECK(r->vertexGapM < 1e-6);
+        CHECK(r->jointGapM < 1e-6);
+        CHECK(r->spawnGapM < 1e-4);
+        CHECK_FALSE(r->drop.exploded);
+        CHECK(r->drop.settleTimeS.has_value());
+    }
+}
+
+// The rigs table of the README: `afb_tests "[.gen-table]"`.
+TEST_CASE("gen: rigs table", "[.gen-table]") {
+    AFB_REQUIRE_CORPUS(corpus);
+    std::printf(
+        "| model | joints | bodies / constraints | height m | mass kg | spawn: worst joint from bind m | 1 m drop: "
+        "settle s, worst anchor m |\n|---|---|---|---|---|---|---|\n");
+    for (const RigCase& c : kRigs) {
+        std::string messages;
+        const auto r = runRig(corpus, c, messages);
+        REQUIRE(r);
+        std::printf("| %s | %zu | %zu / %zu | %.2f | %.1f | %.1e | %.2f, %.4f |\n", fs::path(c.path).filename().c_str(),
+                    r->joints, r->bodies, r->constraints, r->heightM, r->massKg, r->spawnGapM,
+                    r->drop.settleTimeS.value_or(-1), r->drop.maxAnchorErrorM);
     }
 }

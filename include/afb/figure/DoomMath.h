@@ -12,6 +12,10 @@ inline constexpr double kRadPerDeg = 0.017453292519943295769;
 /// forward, left and up. Degrees; positive pitch points the nose down (af-format §0).
 Eigen::Matrix3d anglesToRotation(double pitchDeg, double yawDeg, double rollDeg);
 
+/// The inverse of anglesToRotation: (pitch, yaw, roll) in degrees of a proper rotation, pitch in [−90, 90]; at
+/// pitch ±90 the roll is folded into the yaw. For writing `angles` of an `.af` body (afb gen).
+Eigen::Vector3d rotationToAngles(const Eigen::Matrix3d& rotation);
+
 /// idVec3::ToAngles: yaw = atan2(y, x) in [0, 360), pitch = −atan2(z, √(x²+y²)); roll 0. The vertical case uses
 /// the engine's exact test (x == 0 and y == 0: yaw 0, pitch −90 for z > 0, else −270). Degrees.
 struct PitchYaw {

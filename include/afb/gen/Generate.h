@@ -46,8 +46,13 @@ struct GenRules {
     double minBodyFraction = 0.08;
     int minVertices = 8;              ///< so does a bone with fewer vertices than this …
     double minVertexFraction = 0.005; ///< … or than this fraction of the model's vertices
-    std::vector<std::string> shapes;  ///< shapes tried, smallest enclosing volume wins: box, cylinder,
-                                      ///< dodecahedron, octahedron, bone
+    /// After fitting, a body merges into its parent (the smallest ratio first) when it and every body hanging from it
+    /// are under this fraction of the parent's volume (a leaf, a braid of helper bones), or when it is under this
+    /// fraction of the smaller of its parent and its largest child (a thin link): with one density, a 10:1 mass
+    /// ratio across a joint is what the figure layer warns of.
+    double minVolumeRatio = 0.1;
+    std::vector<std::string> shapes; ///< shapes tried, smallest enclosing volume wins: box, cylinder,
+                                     ///< dodecahedron, octahedron, bone
     /// Total mass = this × the bodies' volume when no --mass is given. The bodies enclose the mesh, so they hold
     /// about twice its volume: 500 gives a human-sized figure about what Doom's weigh (zsec: 250).
     double densityKgM3 = 500;
@@ -61,10 +66,10 @@ struct GenRules {
 GenRules defaultRules();
 
 /// The default rules with the keys of a JSON file written over them. Keys: weightThreshold, merge, keep, skip,
-/// minBodyFraction, minVertices, minVertexFraction, shapes, densityKgM3, forward ([x, y, z]), joints (a list: each
-/// {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg, tiltDeg, tiltToward, minDeg, maxDeg, bend,
-/// friction}; put before the defaults, so they win), fallback (an object as in joints). An unknown key, a wrong type or
-/// a bad regular expression is an error naming the file.
+/// minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes, densityKgM3, forward ([x, y, z]), joints (a
+/// list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg, tiltDeg, tiltToward, minDeg, maxDeg,
+/// bend, friction}; put before the defaults, so they win), fallback (an object as in joints). An unknown key, a wrong
+/// type or a bad regular expression is an error naming the file.
 std::optional<GenRules> loadRules(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 /// The same from JSON text; `fileName` is used in messages.
 std::optional<GenRules> parseRules(const std::string& json, const std::string& fileName,

@@ -93,6 +93,10 @@ decl::Md5Anim bindPoseAnim(const Rig& rig, const std::string& commandline);
 /// The md5 quaternion components (x, y, z) of a standard rotation: the conjugate, w made non-negative (§7.3).
 Eigen::Vector3d md5Orientation(const Eigen::Matrix3d& rotation);
 
+/// The model's size: the largest extent of its vertices' bounding box (of its joints' when it has no vertex),
+/// Doom units.
+double modelHeight(const Rig& rig);
+
 /// Bind-pose positions of every vertex of an md5mesh (Σ bias·(p_j + R_j·offset)), surface by surface, Doom units.
 std::vector<std::vector<Eigen::Vector3d>> skinnedBindVertices(const decl::Md5Mesh& mesh);
 
