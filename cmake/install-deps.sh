@@ -10,7 +10,7 @@ packages=(
   clang-format-14                        # cmake/check-format.sh (CI's format check)
   libbullet-dev                          # float and -float64 builds of Bullet
   libeigen3-dev
-  libassimp-dev                          # afb drop --gltf: glTF 2.0 export (and the tests' re-import)
+  libassimp-dev                          # afb drop --gltf: glTF 2.0 export; afb gen: importing rigged meshes
   catch2                                 # Catch2 v2 on Debian 12
   libcli11-dev
   nlohmann-json3-dev
