@@ -4,13 +4,7 @@
 file(REMOVE_RECURSE "${TMP}")
 file(MAKE_DIRECTORY "${TMP}")
 
-function(run expect_rc out_var)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc STREQUAL expect_rc)
-    message(FATAL_ERROR "${ARGN}\nexit ${rc}, expected ${expect_rc}\n${out}\n${err}")
-  endif()
-  set(${out_var} "${out}${err}" PARENT_SCOPE)
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/run.cmake")
 
 run(0 out "${AFB}" gen "${SRC}/models/md5/humanoid/humanoid.md5mesh" --out "${TMP}/content" --name hum --mass 80 --json)
 if(NOT out MATCHES "\"name\": \"hum\"" OR NOT out MATCHES "\"totalMassKg\": 80" OR NOT out MATCHES "\"role\": \"knee\"")

@@ -1,10 +1,9 @@
-# Included by the cmake -P helpers of the CLI tests: run(EXPECTED COMMAND...) runs the command, logs its output,
-# fails unless it exits with EXPECTED, and leaves the combined output in `run_output`.
-function(run expected)
+# Shared by the cmake -P CLI tests: run(EXPECT_RC OUT_VAR COMMAND...) runs a command, fails the test unless it
+# exits with EXPECT_RC, and returns its stdout and stderr in OUT_VAR.
+function(run expect_rc out_var)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${ARGN}\n${out}${err}")
-  if(NOT rc STREQUAL expected)
-    message(FATAL_ERROR "exit code ${rc}, expected ${expected}")
+  if(NOT rc STREQUAL expect_rc)
+    message(FATAL_ERROR "${ARGN}\nexit ${rc}, expected ${expect_rc}\n${out}\n${err}")
   endif()
-  set(run_output "${out}${err}" PARENT_SCOPE)
+  set(${out_var} "${out}${err}" PARENT_SCOPE)
 endfunction()
