@@ -110,8 +110,6 @@ class MultibodyLimit : public btMultiBodyConstraint {
     void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
                               const btContactSolverInfo& info) override {
         if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
-        const btMatrix3x3 rotA = m_a.body->getWorldTransform().getBasis();
-        const btMatrix3x3 rotB = m_b.body ? m_b.body->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
         const btScalar dt = info.m_timeStep;
         btScalar margin = 0;
         if (m_policy.speculative && m_a.angularVelocity) {
@@ -120,31 +118,13 @@ class MultibodyLimit : public btMultiBodyConstraint {
             margin = (*m_a.angularVelocity - wB).length() * dt * 2 + btScalar(0.01);
         }
         LimitRow found[2];
-        int n = 0;
-        if (const auto* d = std::get_if<Direction>(&m_limit))
-            n = directionLimitRows(rotA * d->shaftInA, rotB * d->basisInB, d->shape, d->half1, d->half2, margin, found);
-        else if (const auto* h = std::get_if<Hinge>(&m_limit))
-            n = hingeRangeRow(rotA * h->frameInA, rotB * h->frameInB, h->lower, h->upper, margin, found[0]);
+        const int n = rowsNow(margin, found);
         const auto* twist = std::get_if<Twist>(&m_limit);
-        if (twist) n = twistRow(rotA * twist->frameInA, rotB * twist->frameInB, found[0]);
-        const int ndof = m_bodyA->getNumDofs() + 6;
-        m_jac.resize(static_cast<std::size_t>(ndof));
-        m_jacB.resize(static_cast<std::size_t>(ndof));
         const btVector3 zero(0, 0, 0);
         const btVector3 pointA = m_a.body->getWorldTransform().getOrigin();
         for (int i = 0; i < n; ++i) {
             const LimitRow& r = found[i];
-            // The excess grows at axis·(ωA − ωB): the row's velocity J·q̇ = (ωB − ωA)·axis, so a positive impulse
-            // reduces the excess (as setLimitRow's rows for rigid bodies).
-            m_bodyA->fillConstraintJacobianMultiDof(m_a.link, pointA, r.axisWorld, zero, m_jac.data(), data.scratch_r,
-                                                    data.scratch_v, data.scratch_m);
-            if (m_b.body) {
-                m_bodyA->fillConstraintJacobianMultiDof(m_b.link, pointA, r.axisWorld, zero, m_jacB.data(),
-                                                        data.scratch_r, data.scratch_v, data.scratch_m);
-                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = m_jacB[k] - m_jac[k];
-            } else {
-                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = -m_jac[k];
-            }
+            fillJacobian(r.axisWorld, data.scratch_r, data.scratch_v, data.scratch_m);
             // Target row velocity: past the limit, Baumgarte recovery of the limit ERP per step; before it
             // (speculative), the joint may close at most the remaining gap in this step. Bullet turns the
             // position error e into the target −e·erp/dt with the world's joint ERP, so e is scaled by it.
@@ -164,7 +144,76 @@ class MultibodyLimit : public btMultiBodyConstraint {
         }
     }
 
+    /// One nonlinear Gauss–Seidel step on positions (velocities untouched): the tree moves along M⁻¹Jᵀ of each
+    /// violated row until that row's excess is closed (as far as the linearisation reaches). Returns the largest
+    /// excess found, rad.
+    btScalar correctPositions(btAlignedObjectArray<btScalar>& r, btAlignedObjectArray<btVector3>& v,
+                              btAlignedObjectArray<btMatrix3x3>& m, btAlignedObjectArray<btQuaternion>& q,
+                              btAlignedObjectArray<btVector3>& o) {
+        if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
+        const bool twist = std::holds_alternative<Twist>(m_limit);
+        btScalar worst = 0;
+        for (int pass = 0; pass < 2; ++pass) { // a pyramid's corner: both rows, each from the pose the other left
+            LimitRow found[2];
+            const int n = rowsNow(0, found);
+            const LimitRow* row = nullptr;
+            for (int i = 0; i < n; ++i)
+                if ((found[i].excess > 0 || (twist && std::abs(found[i].excess) > kTwistSlopRad)) &&
+                    (!row || std::abs(found[i].excess) > std::abs(row->excess)))
+                    row = &found[i];
+            if (!row) break;
+            const btScalar excess = row->excess;
+            if (pass == 0) worst = std::abs(excess);
+            fillJacobian(row->axisWorld, r, v, m);
+            m_move.resize(m_jac.size());
+            m_bodyA->calcAccelerationDeltasMultiDof(m_jac.data(), m_move.data(), r, v);
+            btScalar w = 0;
+            for (std::size_t k = 0; k < m_jac.size(); ++k) w += m_jac[k] * m_move[k];
+            if (!(w > SIMD_EPSILON)) break;
+            // J·Δq is how far the excess falls (the row's velocity times one), so Δq = M⁻¹Jᵀ·excess/w closes it.
+            for (btScalar& x : m_move) x *= excess / w;
+            m_bodyA->stepPositionsMultiDof(1, nullptr, m_move.data());
+            m_bodyA->forwardKinematics(q, o);
+            m_bodyA->updateCollisionObjectWorldTransforms(q, o);
+        }
+        return worst;
+    }
+
   private:
+    static constexpr btScalar kTwistSlopRad = btScalar(0.01); ///< a twist the position sweeps leave to the row
+
+    // The rows of this limit at the present pose (the colliders' transforms), with the speculative margin.
+    int rowsNow(btScalar margin, LimitRow found[2]) const {
+        const btMatrix3x3 rotA = m_a.body->getWorldTransform().getBasis();
+        const btMatrix3x3 rotB = m_b.body ? m_b.body->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
+        if (const auto* d = std::get_if<Direction>(&m_limit))
+            return directionLimitRows(rotA * d->shaftInA, rotB * d->basisInB, d->shape, d->half1, d->half2, margin,
+                                      found);
+        if (const auto* h = std::get_if<Hinge>(&m_limit))
+            return hingeRangeRow(rotA * h->frameInA, rotB * h->frameInB, h->lower, h->upper, margin, found[0]);
+        const Twist& t = std::get<Twist>(m_limit);
+        return twistRow(rotA * t.frameInA, rotB * t.frameInB, found[0]);
+    }
+
+    // m_jac = the Jacobian of a row about `axisWorld` over the whole tree. The excess grows at axis·(ωA − ωB):
+    // the row's velocity J·q̇ = (ωB − ωA)·axis, so a positive impulse reduces the excess (as setLimitRow's rows
+    // for rigid bodies).
+    void fillJacobian(const btVector3& axisWorld, btAlignedObjectArray<btScalar>& r, btAlignedObjectArray<btVector3>& v,
+                      btAlignedObjectArray<btMatrix3x3>& m) {
+        const int ndof = m_bodyA->getNumDofs() + 6;
+        m_jac.resize(static_cast<std::size_t>(ndof));
+        m_jacB.resize(static_cast<std::size_t>(ndof));
+        const btVector3 zero(0, 0, 0);
+        const btVector3 pointA = m_a.body->getWorldTransform().getOrigin();
+        m_bodyA->fillConstraintJacobianMultiDof(m_a.link, pointA, axisWorld, zero, m_jac.data(), r, v, m);
+        if (m_b.body) {
+            m_bodyA->fillConstraintJacobianMultiDof(m_b.link, pointA, axisWorld, zero, m_jacB.data(), r, v, m);
+            for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = m_jacB[k] - m_jac[k];
+        } else {
+            for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = -m_jac[k];
+        }
+    }
+
     // The twist of frame B relative to frame A about their X axes, as a row in directionLimitRows' convention:
     // the excess grows at axis·(ωA − ωB).
     static int twistRow(const btMatrix3x3& frameA, const btMatrix3x3& frameB, LimitRow& out) {
@@ -180,7 +229,7 @@ class MultibodyLimit : public btMultiBodyConstraint {
     Side m_a, m_b;
     Kind m_limit;
     LimitRowPolicy m_policy;
-    std::vector<btScalar> m_jac, m_jacB;
+    std::vector<btScalar> m_jac, m_jacB, m_move;
 };
 
 // Bullet integrates a btMultiBody's velocity-product terms (Coriolis, centripetal, gyroscopic) explicitly: once
@@ -304,6 +353,7 @@ class MultibodyRagdoll::Action : public btActionInterface {
         }
         activeTime += dt;
         m_owner.dampVelocities(dt);
+        m_owner.correctLimitPositions();
         const std::vector<BodySample> samples = m_owner.samples();
         for (std::size_t i = 0; i < samples.size(); ++i) m_owner.m_angularVelocity[i] = samples[i].angularVelocity;
         if (m_comeToRest && m_rest.update(samples, dt, activeTime)) m_owner.putToRest();
@@ -353,6 +403,7 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
         m_linearDamping = static_cast<btScalar>(linear / mass);
         m_angularDamping = static_cast<btScalar>(angular / mass);
     }
+    m_positionIterations = std::max(0, options.method.positionIterations);
     m_action = std::make_unique<Action>(*this, options.comeToRest);
     build(options);
     addColliders(options);
@@ -591,6 +642,7 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
                      &m_angularVelocity[static_cast<std::size_t>(c.body2)]};
         auto row = std::make_unique<MultibodyLimit>(treeA, sideA, sideB, *limit, policy);
         m_world.addMultiBodyConstraint(row.get());
+        m_limits.push_back(row.get());
         m_constraints.push_back(std::move(row));
     }
     // The universal joints' twist rows (§4.4), parent side first.
@@ -603,6 +655,7 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
             auto row = std::make_unique<MultibodyLimit>(p.body.get(), parent, child,
                                                         MultibodyLimit::Twist{j.frameInParent, j.frameInChild}, policy);
             m_world.addMultiBodyConstraint(row.get());
+            m_limits.push_back(row.get());
             m_constraints.push_back(std::move(row));
         }
     for (Part& p : m_parts) {
@@ -613,6 +666,20 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
         m_constraints.push_back(std::move(guard));
     }
     recordMotion();
+}
+
+void MultibodyRagdoll::correctLimitPositions() {
+    btAlignedObjectArray<btScalar> r;
+    btAlignedObjectArray<btVector3> v;
+    btAlignedObjectArray<btMatrix3x3> m;
+    btAlignedObjectArray<btQuaternion> q;
+    btAlignedObjectArray<btVector3> o;
+    for (int sweep = 0; sweep < m_positionIterations; ++sweep) {
+        btScalar worst = 0;
+        for (btMultiBodyConstraint* c : m_limits)
+            worst = std::max(worst, static_cast<MultibodyLimit*>(c)->correctPositions(r, v, m, q, o));
+        if (worst == 0) break;
+    }
 }
 
 void MultibodyRagdoll::recordMotion() {

@@ -105,6 +105,9 @@ class MultibodyRagdoll {
     void addConstraints(const Method& method);
     void refreshTransforms(btMultiBody& body);
     void dampVelocities(btScalar dt);
+    /// Method::positionIterations sweeps of every limit and twist row on positions (velocities untouched), after
+    /// each substep: what the velocity rows left past a limit is closed before the step ends.
+    void correctLimitPositions();
     /// The trees' motion now as the energy guards' reference (after each step and any outside velocity change).
     void recordMotion();
 
@@ -121,6 +124,8 @@ class MultibodyRagdoll {
     btScalar m_linearDamping = 0, m_angularDamping = 0;
     std::vector<bool> m_treeEdge;                 ///< per figure constraint: a tree joint (a link), not a loop
     std::vector<btMultiBodyConstraint*> m_guards; ///< per part, its energy guard (owned by m_constraints)
+    std::vector<btMultiBodyConstraint*> m_limits; ///< limit and twist rows (owned by m_constraints)
+    int m_positionIterations = 0;                 ///< sweeps of correctLimitPositions
     std::unique_ptr<Action> m_action;
 };
 

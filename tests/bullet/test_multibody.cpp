@@ -283,8 +283,8 @@ TEST_CASE("multibody: the humanoid's 1 m drop keeps every joint together", "[bul
     INFO("anchor " << r.maxAnchorErrorM << " m, limit " << r.maxLimitViolationDeg << " deg at " << r.worstLimitJoint
                    << ", peak penetration " << r.maxPenetrationM << " m, rest " << r.restPenetrationM << " m");
     CHECK_FALSE(r.exploded);
-    CHECK(r.maxAnchorErrorM < 1e-5);    // rigid default: about 20 mm
-    CHECK(r.maxLimitViolationDeg < 16); // the rigid default's worst at 1 m (README: the presets)
+    CHECK(r.maxAnchorErrorM < 1e-5); // rigid default: about 20 mm
+    CHECK(r.maxLimitViolationDeg < 8);
     CHECK(r.restPenetrationM < 0.01);
 }
 
