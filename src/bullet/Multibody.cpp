@@ -38,6 +38,32 @@ btQuaternion quatOf(const btMatrix3x3& m) {
     return q;
 }
 
+// A tree's kinetic energy (J), linear momentum (N·s, world) and mass (kg), from its link velocities.
+struct TreeMotion {
+    double energy = 0;
+    btVector3 momentum{0, 0, 0};
+    btScalar mass = 0;
+};
+TreeMotion treeMotion(const btMultiBody& mb) {
+    const std::size_t n = static_cast<std::size_t>(mb.getNumLinks() + 1);
+    btAlignedObjectArray<btVector3> w, v;
+    w.resize(static_cast<int>(n));
+    v.resize(static_cast<int>(n));
+    mb.compTreeLinkVelocities(&w[0], &v[0]); // in each link's frame
+    TreeMotion out;
+    for (int k = 0; k < static_cast<int>(n); ++k) {
+        const bool base = k == 0;
+        const btScalar m = base ? mb.getBaseMass() : mb.getLinkMass(k - 1);
+        const btVector3& inertia = base ? mb.getBaseInertia() : mb.getLinkInertia(k - 1);
+        const btMatrix3x3 toWorld =
+            base ? btMatrix3x3(mb.getWorldToBaseRot().inverse()) : mb.getLink(k - 1).m_cachedWorldTransform.getBasis();
+        out.energy += 0.5 * static_cast<double>(m * v[k].length2() + w[k].dot(inertia * w[k]));
+        out.momentum += toWorld * v[k] * m;
+        out.mass += m;
+    }
+    return out;
+}
+
 // A limit of a figure constraint on two links of one multibody (or one link against the world): the same rows as
 // the rigid backend's DirectionLimitConstraint and HingeRangeConstraint (directionLimitRows, hingeRangeRow: one
 // definition of a limit's excess and of its rate), each row's Jacobian taken over the whole tree, so the row's
@@ -60,9 +86,17 @@ class MultibodyLimit : public btMultiBodyConstraint {
         btMatrix3x3 frameInA, frameInB; ///< frame B world for a world constraint
         btScalar lower, upper;
     };
+    /// §4.4's "no relative spin about the shafts" of a universal joint built as a spherical link: the twist of
+    /// frame B relative to frame A about their X axes (shaft 1) held at zero by an equality row about the bisector
+    /// of the two X axes (the axis a homokinetic joint does not turn about).
+    struct Twist {
+        btMatrix3x3 frameInA, frameInB;
+    };
+    using Kind = std::variant<Direction, Hinge, Twist>;
 
-    MultibodyLimit(btMultiBody* tree, Side a, Side b, std::variant<Direction, Hinge> limit, LimitRowPolicy policy)
-        : btMultiBodyConstraint(tree, nullptr, a.link, b.body ? b.link : a.link, 2, true, MULTIBODY_CONSTRAINT_LIMIT),
+    MultibodyLimit(btMultiBody* tree, Side a, Side b, Kind limit, LimitRowPolicy policy)
+        : btMultiBodyConstraint(tree, nullptr, a.link, b.body ? b.link : a.link, 2,
+                                !std::holds_alternative<Twist>(limit), MULTIBODY_CONSTRAINT_LIMIT),
           m_a(a), m_b(b), m_limit(limit), m_policy(policy) {}
 
     void finalizeMultiDof() override {
@@ -76,59 +110,200 @@ class MultibodyLimit : public btMultiBodyConstraint {
     void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
                               const btContactSolverInfo& info) override {
         if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
-        const btMatrix3x3 rotA = m_a.body->getWorldTransform().getBasis();
-        const btMatrix3x3 rotB = m_b.body ? m_b.body->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
         const btScalar dt = info.m_timeStep;
         btScalar margin = 0;
-        if (m_policy.speculative) {
+        if (m_policy.speculative && m_a.angularVelocity) {
             // As the rigid rows: the angle the joint can turn in about two steps at its current rate.
             const btVector3 wB = m_b.angularVelocity ? *m_b.angularVelocity : btVector3(0, 0, 0);
             margin = (*m_a.angularVelocity - wB).length() * dt * 2 + btScalar(0.01);
         }
         LimitRow found[2];
-        int n = 0;
-        if (const auto* d = std::get_if<Direction>(&m_limit))
-            n = directionLimitRows(rotA * d->shaftInA, rotB * d->basisInB, d->shape, d->half1, d->half2, margin, found);
-        else if (const auto* h = std::get_if<Hinge>(&m_limit))
-            n = hingeRangeRow(rotA * h->frameInA, rotB * h->frameInB, h->lower, h->upper, margin, found[0]);
-        const int ndof = m_bodyA->getNumDofs() + 6;
-        m_jac.resize(static_cast<std::size_t>(ndof));
-        m_jacB.resize(static_cast<std::size_t>(ndof));
+        const int n = rowsNow(margin, found);
+        const auto* twist = std::get_if<Twist>(&m_limit);
         const btVector3 zero(0, 0, 0);
         const btVector3 pointA = m_a.body->getWorldTransform().getOrigin();
         for (int i = 0; i < n; ++i) {
             const LimitRow& r = found[i];
-            // The excess grows at axis·(ωA − ωB): the row's velocity J·q̇ = (ωB − ωA)·axis, so a positive impulse
-            // reduces the excess (as setLimitRow's rows for rigid bodies).
-            m_bodyA->fillConstraintJacobianMultiDof(m_a.link, pointA, r.axisWorld, zero, m_jac.data(), data.scratch_r,
-                                                    data.scratch_v, data.scratch_m);
-            if (m_b.body) {
-                m_bodyA->fillConstraintJacobianMultiDof(m_b.link, pointA, r.axisWorld, zero, m_jacB.data(),
-                                                        data.scratch_r, data.scratch_v, data.scratch_m);
-                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = m_jacB[k] - m_jac[k];
-            } else {
-                for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = -m_jac[k];
-            }
+            fillJacobian(r.axisWorld, data.scratch_r, data.scratch_v, data.scratch_m);
             // Target row velocity: past the limit, Baumgarte recovery of the limit ERP per step; before it
             // (speculative), the joint may close at most the remaining gap in this step. Bullet turns the
             // position error e into the target −e·erp/dt with the world's joint ERP, so e is scaled by it.
-            const btScalar target = r.excess > 0 ? m_policy.errorReduction * r.excess / dt : r.excess / dt;
+            // A twist row is an equality: the joint ERP's Baumgarte recovery of its angle, both ways.
+            const btScalar target = twist          ? info.m_erp * r.excess / dt
+                                    : r.excess > 0 ? m_policy.errorReduction * r.excess / dt
+                                                   : r.excess / dt;
             const btScalar erp = info.m_erp > 0 ? info.m_erp : btScalar(1);
             btMultiBodySolverConstraint& row = rows.expandNonInitializing();
             row.m_solverBodyIdA = data.m_fixedBodyId;
             row.m_solverBodyIdB = data.m_fixedBodyId;
             fillMultiBodyConstraint(row, data, m_jac.data(), nullptr, -r.axisWorld, zero, pointA, pointA,
-                                    -target * dt / erp, info, 0, SIMD_INFINITY, true, 1, false, 0, 0, 1);
+                                    -target * dt / erp, info, twist ? -SIMD_INFINITY : 0, SIMD_INFINITY, true, 1, false,
+                                    0, 0, 1);
             row.m_orgConstraint = this;
             row.m_orgDofIndex = i;
         }
     }
 
+    /// One nonlinear Gauss–Seidel step on positions (velocities untouched): the tree moves along M⁻¹Jᵀ of each
+    /// violated row until that row's excess is closed (as far as the linearisation reaches). Returns the largest
+    /// excess found, rad.
+    btScalar correctPositions(btAlignedObjectArray<btScalar>& r, btAlignedObjectArray<btVector3>& v,
+                              btAlignedObjectArray<btMatrix3x3>& m, btAlignedObjectArray<btQuaternion>& q,
+                              btAlignedObjectArray<btVector3>& o) {
+        if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
+        const bool twist = std::holds_alternative<Twist>(m_limit);
+        btScalar worst = 0;
+        for (int pass = 0; pass < 2; ++pass) { // a pyramid's corner: both rows, each from the pose the other left
+            LimitRow found[2];
+            const int n = rowsNow(0, found);
+            const LimitRow* row = nullptr;
+            for (int i = 0; i < n; ++i)
+                if ((found[i].excess > 0 || (twist && std::abs(found[i].excess) > kTwistSlopRad)) &&
+                    (!row || std::abs(found[i].excess) > std::abs(row->excess)))
+                    row = &found[i];
+            if (!row) break;
+            const btScalar excess = row->excess;
+            if (pass == 0) worst = std::abs(excess);
+            fillJacobian(row->axisWorld, r, v, m);
+            m_move.resize(m_jac.size());
+            m_bodyA->calcAccelerationDeltasMultiDof(m_jac.data(), m_move.data(), r, v);
+            btScalar w = 0;
+            for (std::size_t k = 0; k < m_jac.size(); ++k) w += m_jac[k] * m_move[k];
+            if (!(w > SIMD_EPSILON)) break;
+            // J·Δq is how far the excess falls (the row's velocity times one), so Δq = M⁻¹Jᵀ·excess/w closes it.
+            for (btScalar& x : m_move) x *= excess / w;
+            m_bodyA->stepPositionsMultiDof(1, nullptr, m_move.data());
+            m_bodyA->forwardKinematics(q, o);
+            m_bodyA->updateCollisionObjectWorldTransforms(q, o);
+        }
+        return worst;
+    }
+
   private:
+    static constexpr btScalar kTwistSlopRad = btScalar(0.01); ///< a twist the position sweeps leave to the row
+
+    // The rows of this limit at the present pose (the colliders' transforms), with the speculative margin.
+    int rowsNow(btScalar margin, LimitRow found[2]) const {
+        const btMatrix3x3 rotA = m_a.body->getWorldTransform().getBasis();
+        const btMatrix3x3 rotB = m_b.body ? m_b.body->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
+        if (const auto* d = std::get_if<Direction>(&m_limit))
+            return directionLimitRows(rotA * d->shaftInA, rotB * d->basisInB, d->shape, d->half1, d->half2, margin,
+                                      found);
+        if (const auto* h = std::get_if<Hinge>(&m_limit))
+            return hingeRangeRow(rotA * h->frameInA, rotB * h->frameInB, h->lower, h->upper, margin, found[0]);
+        const Twist& t = std::get<Twist>(m_limit);
+        return twistRow(rotA * t.frameInA, rotB * t.frameInB, found[0]);
+    }
+
+    // m_jac = the Jacobian of a row about `axisWorld` over the whole tree. The excess grows at axis·(ωA − ωB):
+    // the row's velocity J·q̇ = (ωB − ωA)·axis, so a positive impulse reduces the excess (as setLimitRow's rows
+    // for rigid bodies).
+    void fillJacobian(const btVector3& axisWorld, btAlignedObjectArray<btScalar>& r, btAlignedObjectArray<btVector3>& v,
+                      btAlignedObjectArray<btMatrix3x3>& m) {
+        const int ndof = m_bodyA->getNumDofs() + 6;
+        m_jac.resize(static_cast<std::size_t>(ndof));
+        m_jacB.resize(static_cast<std::size_t>(ndof));
+        const btVector3 zero(0, 0, 0);
+        const btVector3 pointA = m_a.body->getWorldTransform().getOrigin();
+        m_bodyA->fillConstraintJacobianMultiDof(m_a.link, pointA, axisWorld, zero, m_jac.data(), r, v, m);
+        if (m_b.body) {
+            m_bodyA->fillConstraintJacobianMultiDof(m_b.link, pointA, axisWorld, zero, m_jacB.data(), r, v, m);
+            for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = m_jacB[k] - m_jac[k];
+        } else {
+            for (int k = 0; k < ndof; ++k) m_jac[static_cast<std::size_t>(k)] = -m_jac[k];
+        }
+    }
+
+    // The twist of frame B relative to frame A about their X axes, as a row in directionLimitRows' convention:
+    // the excess grows at axis·(ωA − ωB).
+    static int twistRow(const btMatrix3x3& frameA, const btMatrix3x3& frameB, LimitRow& out) {
+        btQuaternion q = quatOf(frameA.transpose() * frameB);
+        if (q.w() < 0) q = -q;
+        const btVector3 bisector = frameA.getColumn(0) + frameB.getColumn(0);
+        if (bisector.length2() < btScalar(1e-6)) return 0; // swung 180°: no twist axis (a limit prevents it)
+        out.axisWorld = -bisector.normalized();
+        out.excess = 2 * btAtan2(q.x(), q.w());
+        return 1;
+    }
+
     Side m_a, m_b;
-    std::variant<Direction, Hinge> m_limit;
+    Kind m_limit;
     LimitRowPolicy m_policy;
-    std::vector<btScalar> m_jac, m_jacB;
+    std::vector<btScalar> m_jac, m_jacB, m_move;
+};
+
+// Bullet integrates a btMultiBody's velocity-product terms (Coriolis, centripetal, gyroscopic) explicitly: once
+// a limb spins at tens of rad/s (ω·dt of a radian per step, as at a hard landing), each step's unconstrained
+// update multiplies the tree's kinetic energy (measured: ×1.6, ×2.8, ×6 in three steps) until it explodes. No
+// force but gravity does work in that update (joint forces do none; damping and contacts come after), so the
+// guard, called between Bullet's unconstrained update and the constraint solve, holds the update to gravity's
+// work: past it, the motion relative to the centre of mass is scaled down (linear momentum kept).
+class EnergyGuard : public btMultiBodyConstraint {
+  public:
+    EnergyGuard(btMultiBody* tree, const btCollisionObject& base, const btDynamicsWorld& world)
+        : btMultiBodyConstraint(tree, nullptr, -1, -1, 0, false, MULTIBODY_CONSTRAINT_LIMIT), m_base(base),
+          m_world(world) {}
+
+    /// The tree's motion now, the reference of the next check (after each step, and after any change of the
+    /// velocities from outside: impulses, body states).
+    void record() {
+        const TreeMotion t = treeMotion(*m_bodyA);
+        m_energy = t.energy;
+        m_momentum = t.momentum;
+    }
+
+    void finalizeMultiDof() override {
+        allocateJacobiansMultiDof();
+        m_numDofsFinalized = m_jacSizeBoth;
+    }
+    int getIslandIdA() const override { return m_base.getIslandTag(); }
+    int getIslandIdB() const override { return m_base.getIslandTag(); }
+    void debugDraw(btIDebugDraw*) override {}
+
+    void createConstraintRows(btMultiBodyConstraintArray&, btMultiBodyJacobianData& data,
+                              const btContactSolverInfo& info) override {
+        btMultiBody& mb = *m_bodyA;
+        const TreeMotion now = treeMotion(mb);
+        const double dt = info.m_timeStep;
+        const btVector3 g = m_world.getGravity();
+        // Gravity's work in one semi-implicit step: g·p·dt + ½·M·g²·dt² (exact for a free fall); a small
+        // relative slack keeps the guard out of ordinary motion.
+        const double fall = 0.5 * static_cast<double>(now.mass * g.length2()) * dt * dt;
+        const double allowed =
+            m_energy + static_cast<double>(g.dot(m_momentum)) * dt + fall + kSlack * (m_energy + fall) + 1e-9;
+        if (!(now.energy > allowed)) return;
+        const btVector3 vCom = mb.hasFixedBase() || !(now.mass > 0) ? btVector3(0, 0, 0) : now.momentum / now.mass;
+        const double translation = 0.5 * static_cast<double>(now.mass * vCom.length2());
+        const double relative = now.energy - translation;
+        if (!(relative > 0)) return;
+        const btScalar k = static_cast<btScalar>(std::sqrt(std::max(0.0, allowed - translation) / relative));
+        // The change, in Bullet's layout of a tree's velocities: base ω, base v (world), then every joint's.
+        const int n = mb.getNumDofs() + 6;
+        m_delta.resize(static_cast<std::size_t>(n));
+        const btScalar* q = mb.getVelocityVector();
+        for (int i = 0; i < n; ++i) m_delta[static_cast<std::size_t>(i)] = (k - 1) * q[i];
+        if (mb.hasFixedBase()) std::fill(m_delta.begin(), m_delta.begin() + 6, btScalar(0));
+        else
+            for (int i = 3; i < 6; ++i) m_delta[static_cast<std::size_t>(i)] = (k - 1) * (q[i] - vCom[i - 3]);
+        // Contacts and limits have already built their rows from the velocities (the solver converts contacts
+        // before any multibody constraint), so the change goes in as a solver velocity change, as an impulse's
+        // would: every row then sees it. A tree no row touches yet takes it directly.
+        const int companion = mb.getCompanionId();
+        if (companion >= 0) {
+            for (int i = 0; i < n; ++i) data.m_deltaVelocities[companion + i] += m_delta[static_cast<std::size_t>(i)];
+            mb.applyDeltaVeeMultiDof2(m_delta.data(), 1);
+        } else {
+            mb.applyDeltaVeeMultiDof(m_delta.data(), 1);
+        }
+    }
+
+  private:
+    static constexpr double kSlack = 1e-3;
+    const btCollisionObject& m_base;
+    const btDynamicsWorld& m_world;
+    double m_energy = 0;
+    btVector3 m_momentum{0, 0, 0};
+    std::vector<btScalar> m_delta;
 };
 
 } // namespace
@@ -173,13 +348,16 @@ class MultibodyRagdoll::Action : public btActionInterface {
                     wake();
                     break;
                 }
+            m_owner.recordMotion();
             return;
         }
         activeTime += dt;
         m_owner.dampVelocities(dt);
+        m_owner.correctLimitPositions();
         const std::vector<BodySample> samples = m_owner.samples();
         for (std::size_t i = 0; i < samples.size(); ++i) m_owner.m_angularVelocity[i] = samples[i].angularVelocity;
         if (m_comeToRest && m_rest.update(samples, dt, activeTime)) m_owner.putToRest();
+        m_owner.recordMotion();
     }
     void debugDraw(btIDebugDraw*) override {}
 
@@ -225,6 +403,7 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
         m_linearDamping = static_cast<btScalar>(linear / mass);
         m_angularDamping = static_cast<btScalar>(angular / mass);
     }
+    m_positionIterations = std::max(0, options.method.positionIterations);
     m_action = std::make_unique<Action>(*this, options.comeToRest);
     build(options);
     addColliders(options);
@@ -311,7 +490,7 @@ void MultibodyRagdoll::build(const SpawnOptions& options) {
                 case JointType::Universal: j.kind = Joint::Kind::Universal; break;
                 case JointType::Spring: break; // not a tree edge
                 }
-                links += j.kind == Joint::Kind::Universal ? 2 : 1;
+                ++links;
                 j.link = links - 1;
                 m_bodies[static_cast<std::size_t>(child)] = {partIndex, j.link};
                 part.joints.push_back(j);
@@ -346,17 +525,13 @@ void MultibodyRagdoll::build(const SpawnOptions& options) {
                 mb.setupPrismatic(j.link, m, inertia, parentLink, q0, j.axisInChild, j.parentToPivot, j.pivotToChild,
                                   true);
                 break;
-            case Joint::Kind::Universal: {
-                // §4.4: no spin about the shafts, two free swings: a massless link in the constraint frame turning
-                // about the frame's Y, then the child turning about the frame's Z (a Cardan joint).
-                const btMatrix3x3 frameWorld0 = rotation(j.child) * j.frameInChild;
-                mb.setupRevolute(j.link - 1, 0, btVector3(0, 0, 0), parentLink,
-                                 quatOf(frameWorld0.transpose() * rotation(j.parent)), btVector3(0, 1, 0),
-                                 j.parentToPivot, btVector3(0, 0, 0), true);
-                mb.setupRevolute(j.link, m, inertia, j.link - 1, quatOf(rotation(j.child).transpose() * frameWorld0),
-                                 j.frameInChild.getColumn(2), btVector3(0, 0, 0), j.pivotToChild, true);
+            case Joint::Kind::Universal:
+                // §4.4: two free swings and no spin about the shafts: a spherical link whose twist a row holds
+                // (addConstraints). A Cardan pair of revolute links (a massless link turning about one axis, the
+                // child about a second) has a singular pose at 90° from the load pose, reached at impact, where
+                // the first coordinate spins the child about its own long axis and explodes (README).
+                mb.setupSpherical(j.link, m, inertia, parentLink, q0, j.parentToPivot, j.pivotToChild, true);
                 break;
-            }
             }
         }
         mb.finalizeMultiDof();
@@ -444,7 +619,7 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
         if (!sameTree) continue; // a limit across two trees: not modelled (no corpus figure has one)
         // Limits: the rigid backend's rows (Ragdoll::addConstraints), on the links.
         const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
-        std::optional<std::variant<MultibodyLimit::Direction, MultibodyLimit::Hinge>> limit;
+        std::optional<MultibodyLimit::Kind> limit;
         if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
             limit = MultibodyLimit::Direction{LimitShape::Cone, toBt(cone->shaftInBody1),
                                               basisWithX(b2Rot * toBt(cone->axisInBody2)),
@@ -467,8 +642,48 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
                      &m_angularVelocity[static_cast<std::size_t>(c.body2)]};
         auto row = std::make_unique<MultibodyLimit>(treeA, sideA, sideB, *limit, policy);
         m_world.addMultiBodyConstraint(row.get());
+        m_limits.push_back(row.get());
         m_constraints.push_back(std::move(row));
     }
+    // The universal joints' twist rows (§4.4), parent side first.
+    for (Part& p : m_parts)
+        for (const Joint& j : p.joints) {
+            if (j.kind != Joint::Kind::Universal) continue;
+            const MultibodyLimit::Side parent{m_bodies[static_cast<std::size_t>(j.parent)].link,
+                                              m_colliders[static_cast<std::size_t>(j.parent)].get(), nullptr};
+            const MultibodyLimit::Side child{j.link, m_colliders[static_cast<std::size_t>(j.child)].get(), nullptr};
+            auto row = std::make_unique<MultibodyLimit>(p.body.get(), parent, child,
+                                                        MultibodyLimit::Twist{j.frameInParent, j.frameInChild}, policy);
+            m_world.addMultiBodyConstraint(row.get());
+            m_limits.push_back(row.get());
+            m_constraints.push_back(std::move(row));
+        }
+    for (Part& p : m_parts) {
+        auto guard =
+            std::make_unique<EnergyGuard>(p.body.get(), *m_colliders[static_cast<std::size_t>(p.root)], m_world);
+        m_world.addMultiBodyConstraint(guard.get());
+        m_guards.push_back(guard.get());
+        m_constraints.push_back(std::move(guard));
+    }
+    recordMotion();
+}
+
+void MultibodyRagdoll::correctLimitPositions() {
+    btAlignedObjectArray<btScalar> r;
+    btAlignedObjectArray<btVector3> v;
+    btAlignedObjectArray<btMatrix3x3> m;
+    btAlignedObjectArray<btQuaternion> q;
+    btAlignedObjectArray<btVector3> o;
+    for (int sweep = 0; sweep < m_positionIterations; ++sweep) {
+        btScalar worst = 0;
+        for (btMultiBodyConstraint* c : m_limits)
+            worst = std::max(worst, static_cast<MultibodyLimit*>(c)->correctPositions(r, v, m, q, o));
+        if (worst == 0) break;
+    }
+}
+
+void MultibodyRagdoll::recordMotion() {
+    for (btMultiBodyConstraint* g : m_guards) static_cast<EnergyGuard*>(g)->record();
 }
 
 void MultibodyRagdoll::refreshTransforms(btMultiBody& body) {
@@ -574,7 +789,8 @@ void MultibodyRagdoll::setBodyStates(std::span<const figure::BodyState> states) 
                 mb.setJointVel(j.link, (tc.getBasis() * j.axisInChild).dot(rel));
                 break;
             }
-            case Joint::Kind::Spherical: {
+            case Joint::Kind::Spherical:
+            case Joint::Kind::Universal: { // a spherical link too; its twist row pulls a twisted pose back
                 const btQuaternion q = quatOf(local);
                 btScalar pos[4] = {q.x(), q.y(), q.z(), q.w()};
                 mb.setJointPosMultiDof(j.link, pos);
@@ -583,22 +799,12 @@ void MultibodyRagdoll::setBodyStates(std::span<const figure::BodyState> states) 
                 mb.setJointVelMultiDof(j.link, vel);
                 break;
             }
-            case Joint::Kind::Universal: {
-                // G = frame(parent)ᵀ·frame(child) = Ry(q1)·Rz(q2): the massless link turns about the frame's Y,
-                // the child then about the turned frame's Z.
-                const btMatrix3x3 fp = tp.getBasis() * j.frameInParent, fc = tc.getBasis() * j.frameInChild;
-                const btMatrix3x3 g = fp.transpose() * fc;
-                mb.setJointPos(j.link - 1, btAtan2(g[0][2], g[2][2]));
-                mb.setJointPos(j.link, btAtan2(g[1][0], g[1][1]));
-                mb.setJointVel(j.link - 1, fp.getColumn(1).dot(wRel));
-                mb.setJointVel(j.link, fc.getColumn(2).dot(wRel));
-                break;
-            }
             }
         }
         refreshTransforms(mb);
     }
     wake();
+    recordMotion();
 }
 
 void MultibodyRagdoll::applyImpulse(int i, const btVector3& impulse, const btVector3& worldPoint) {
@@ -616,6 +822,7 @@ void MultibodyRagdoll::applyImpulse(int i, const btVector3& impulse, const btVec
     for (btScalar& x : jac) x *= magnitude;
     mb.calcAccelerationDeltasMultiDof(jac.data(), delta.data(), r, v);
     mb.applyDeltaVeeMultiDof(delta.data(), 1);
+    recordMotion();
 }
 
 bool MultibodyRagdoll::atRest() const { return m_action->atRest; }
@@ -635,6 +842,7 @@ void MultibodyRagdoll::putToRest() {
     }
     for (const auto& c : m_colliders) c->forceActivationState(ISLAND_SLEEPING);
     m_action->atRest = true;
+    recordMotion();
 }
 
 void MultibodyRagdoll::wake() { m_action->wake(); }

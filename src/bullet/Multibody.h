@@ -31,8 +31,8 @@ inline constexpr const char* kNeedsMultiBodyWorld =
     "world is a plain btDynamicsWorld: create a btMultiBodyDynamicsWorld, or use the rigid backend";
 
 /// A figure as btMultiBody trees: one per connected part of its constraint graph, a body fixed to the world as a
-/// fixed base, else the part's first body as the floating base and one link per tree edge (a universal joint: two
-/// revolute links with a massless link between). Loops, world attachments and springs are btMultiBodyConstraints.
+/// fixed base, else the part's first body as the floating base and one link per tree edge (a universal joint: a
+/// spherical link whose twist a row holds). Loops, world attachments and springs are btMultiBodyConstraints.
 class MultibodyRagdoll {
   public:
     /// Throws std::invalid_argument (kNeedsMultiBodyWorld) unless `world` is a btMultiBodyDynamicsWorld.
@@ -84,13 +84,14 @@ class MultibodyRagdoll {
     /// How a link's joint coordinates follow from its two bodies' poses (setBodyStates).
     struct Joint {
         enum class Kind { Fixed, Revolute, Prismatic, Spherical, Universal } kind = Kind::Fixed;
-        int child = -1, parent = -1;             ///< figure bodies
-        int link = -1;                           ///< the child's link (a universal: the massless link is link − 1)
-        btMatrix3x3 zeroParentToChild;           ///< rotation parent frame → child frame at zero coordinates
-        btVector3 axisInChild;                   ///< revolute / prismatic axis, child frame
-        btVector3 parentToPivot;                 ///< pivot from the parent's centre of mass, parent frame
-        btVector3 pivotToChild;                  ///< child's centre of mass from the pivot, child frame
-        btMatrix3x3 frameInParent, frameInChild; ///< the constraint frame's rotation in each body (universal)
+        int child = -1, parent = -1;   ///< figure bodies
+        int link = -1;                 ///< the child's link
+        btMatrix3x3 zeroParentToChild; ///< rotation parent frame → child frame at zero coordinates
+        btVector3 axisInChild;         ///< revolute / prismatic axis, child frame
+        btVector3 parentToPivot;       ///< pivot from the parent's centre of mass, parent frame
+        btVector3 pivotToChild;        ///< child's centre of mass from the pivot, child frame
+        btMatrix3x3 frameInParent,
+            frameInChild; ///< the constraint frame's rotation in each body (universal: X = shaft 1)
     };
     struct Part {
         std::unique_ptr<btMultiBody> body;
@@ -104,6 +105,11 @@ class MultibodyRagdoll {
     void addConstraints(const Method& method);
     void refreshTransforms(btMultiBody& body);
     void dampVelocities(btScalar dt);
+    /// Method::positionIterations sweeps of every limit and twist row on positions (velocities untouched), after
+    /// each substep: what the velocity rows left past a limit is closed before the step ends.
+    void correctLimitPositions();
+    /// The trees' motion now as the energy guards' reference (after each step and any outside velocity change).
+    void recordMotion();
 
     std::shared_ptr<const RagdollAsset> m_asset;
     btMultiBodyDynamicsWorld& m_world;
@@ -116,7 +122,10 @@ class MultibodyRagdoll {
     std::vector<std::pair<int, int>> m_colliding;                      ///< figure::selfCollisionPairs
     std::vector<btVector3> m_angularVelocity; ///< per figure body, at the end of the last substep (limit margins)
     btScalar m_linearDamping = 0, m_angularDamping = 0;
-    std::vector<bool> m_treeEdge; ///< per figure constraint: a tree joint (a link), not a loop
+    std::vector<bool> m_treeEdge;                 ///< per figure constraint: a tree joint (a link), not a loop
+    std::vector<btMultiBodyConstraint*> m_guards; ///< per part, its energy guard (owned by m_constraints)
+    std::vector<btMultiBodyConstraint*> m_limits; ///< limit and twist rows (owned by m_constraints)
+    int m_positionIterations = 0;                 ///< sweeps of correctLimitPositions
     std::unique_ptr<Action> m_action;
 };
 
