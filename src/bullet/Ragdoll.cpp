@@ -472,6 +472,13 @@ void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
     const int iterations = m_method.jointIterations;
     const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
+    // At most a main constraint, its friction and a limit per joint.
+    m_frames.reserve(f.constraints.size());
+    m_rigidFrames.reserve(f.constraints.size());
+    m_main.reserve(f.constraints.size());
+    m_constraints.reserve(3 * f.constraints.size());
+    m_disablesCollision.reserve(3 * f.constraints.size());
+    m_limitRows.reserve(3 * f.constraints.size());
     const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
     for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
         const FigureConstraint& c = f.constraints[ci];
@@ -605,10 +612,12 @@ void Ragdoll::addConstraints() {
                 m_disablesCollision.push_back(c.disablesCollision);
             }
         }
+        m_limitRows.resize(m_constraints.size(), false);
         if (limit) {
             m_world.addConstraint(limit.get(), false);
             m_constraints.push_back(std::move(limit));
             m_disablesCollision.push_back(false);
+            m_limitRows.push_back(true);
         }
     }
 }

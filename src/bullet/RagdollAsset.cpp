@@ -79,8 +79,12 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
         r.massKg = whole.massKg;
         r.inertiaKgM2 = whole.inertiaKgM2;
         r.loadPose = whole.pose;
+        btVector3 centre;
+        btScalar radius = 0;
         if (r.bodies.size() == 1) {
             r.shape = m_shapes[static_cast<std::size_t>(r.bodies.front())].get();
+            r.shape->getBoundingSphere(centre, radius);
+            r.boundingRadius = radius;
             continue;
         }
         // A compound of the bodies' own shapes, each at its body frame in the rigid's frame. Two to a few
@@ -93,6 +97,8 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
             compound->addChildShape(toBt(inRigid), m_shapes[static_cast<std::size_t>(b)].get());
         }
         r.shape = compound.get();
+        r.shape->getBoundingSphere(centre, radius);
+        r.boundingRadius = radius;
         m_compounds.push_back(std::move(compound));
     }
     for (const auto& [i, j] : m_contactPairs) {

@@ -168,6 +168,8 @@ class Ragdoll {
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); rigid
     /// backend only (0 for a multibody ragdoll).
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
+    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint).
+    bool bulletConstraintIsLimit(int k) const { return m_limitRows[static_cast<std::size_t>(k)]; }
     /// Bullet constraint `k` of those, in the order they were added to the world.
     btTypedConstraint& bulletConstraint(int k) { return *m_constraints[static_cast<std::size_t>(k)]; }
     const btTypedConstraint& bulletConstraint(int k) const { return *m_constraints[static_cast<std::size_t>(k)]; }
@@ -266,6 +268,7 @@ class Ragdoll {
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;            ///< one per rigid of m_layout
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
     std::vector<bool> m_disablesCollision; ///< per Bullet constraint: added with collision between its bodies off
+    std::vector<bool> m_limitRows;         ///< per Bullet constraint: one of our limit constraints
     int m_group = 0;                       ///< collision group of every body
     std::vector<int> m_masks;              ///< collision mask of each rigid body
     bool m_frozen = false;                 ///< see frozen()

@@ -30,6 +30,8 @@ struct RigidLayout {
         btCollisionShape* shape = nullptr; ///< the body's own shape, or a btCompoundShape of its bodies' (the asset's)
         /// Radius of its continuous-collision sphere: the smallest inner radius of its bodies, metres.
         double innerRadius = 0;
+        /// Bullet's bounding sphere radius of the shape (btCollisionShape::getBoundingSphere), metres.
+        double boundingRadius = 0;
     };
     std::vector<Rigid> rigids;
     std::vector<int> rigidOf;                   ///< per figure body: index into rigids
