@@ -244,7 +244,14 @@ void Ragdoll::figureBodySamples(std::vector<BodySample>& out) const {
     }
 }
 
-int Ragdoll::awakeBodyCount() const { return m_multibody ? m_multibody->awakeBodyCount() : awakeCountOf(m_bodies); }
+int Ragdoll::awakeBodyCount() const {
+    if (m_multibody) return m_multibody->awakeBodyCount();
+    if (!merged()) return awakeCountOf(m_bodies);
+    int n = 0; // figure bodies: a merged rigid counts each body it carries
+    for (std::size_t k = 0; k < m_bodies.size(); ++k)
+        if (m_bodies[k]->isActive()) n += static_cast<int>(m_layout->rigids[k].bodies.size());
+    return n;
+}
 
 JointError Ragdoll::jointError(int i) const {
     if (m_multibody) return m_multibody->jointError(i);

@@ -172,6 +172,7 @@ TEST_CASE("merge: a merged humanoid drives every md5 joint as the unmerged one, 
         sceneOff.step(1.0 / 60);
     }
     compare(0.03, 0.045);
+    CHECK(merged.awakeBodyCount() == static_cast<int>(f.bodies.size())); // figure bodies, merged or not
     const std::vector<figure::Transform> nowMerged = pose::driveSkeleton(f, merged.bodyTransforms()).model;
     const std::vector<figure::Transform> nowSeparate = pose::driveSkeleton(f, separate.bodyTransforms()).model;
     for (std::size_t j = 0; j < spawnPose.size(); ++j) {

@@ -196,7 +196,7 @@ class Ragdoll {
     std::vector<figure::Transform> bodyTransforms() const;
     /// World transforms and velocities of every body.
     std::vector<figure::BodyState> bodyStates() const;
-    /// Bodies Bullet is simulating now (not asleep).
+    /// Figure bodies Bullet is simulating now (not asleep; a merged rigid counts each body it carries).
     int awakeBodyCount() const;
     /// Places every body (one state per body, in body order) and sets its velocities, e.g. from an animation
     /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll. Returns false and changes
