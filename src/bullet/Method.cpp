@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
                                                           "exact", "legacy",  "multibody"};
 
-const std::array<MethodKnob, 18> kKnobs = {{
+const std::array<MethodKnob, 19> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -39,6 +39,7 @@ const std::array<MethodKnob, 18> kKnobs = {{
      "Joints solved exactly per ragdoll each iteration; contacts and limits move the whole ragdoll "
      "(on/off; needs a RagdollSolver)",
      &Method::directJoints},
+    {"merge-fixed", "Bodies joined by fixed constraints simulated as one rigid body (on/off)", &Method::mergeFixed},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).

@@ -170,7 +170,8 @@ bool projectLimitRow(Side& a, Side& b, const LimitRow& row) {
     return true;
 }
 
-bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body2Basis) {
+bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body1Basis,
+                  const btMatrix3x3& body2Basis) {
     LimitRow rows[2];
     int n = 0;
     if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
@@ -182,12 +183,12 @@ bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Fra
         btPlaneSpace1(axis, y, z);
         btMatrix3x3 basis;
         basis.setValue(axis.x(), y.x(), z.x(), axis.y(), y.y(), z.y(), axis.z(), y.z(), z.z());
-        n = directionLimitRows(a.r * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
+        n = directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
                                static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
     } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-        n = directionLimitRows(a.r * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2), LimitShape::Pyramid,
-                               static_cast<btScalar>(p->halfAngle1Rad), static_cast<btScalar>(p->halfAngle2Rad), 0,
-                               rows);
+        n = directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
+                               LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
+                               static_cast<btScalar>(p->halfAngle2Rad), 0, rows);
     }
     bool corrected = false;
     for (int i = 0; i < n; ++i) corrected = projectLimitRow(a, b, rows[i]) || corrected;
@@ -214,13 +215,14 @@ bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
 void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const> manifolds) {
     const figure::Figure& f = r.figure();
     std::vector<Side> bodies;
-    bodies.reserve(static_cast<std::size_t>(r.bodyCount()));
-    for (int i = 0; i < r.bodyCount(); ++i) bodies.push_back(sideOf(&r.body(i)));
+    // One side per Bullet rigid body (figure bodies merged by Method::mergeFixed share one).
+    bodies.reserve(static_cast<std::size_t>(r.rigidBodyCount()));
+    for (int i = 0; i < r.rigidBodyCount(); ++i) bodies.push_back(sideOf(&r.rigidBody(i)));
     Side world;
     // The contacts' sides: this ragdoll's bodies by index, everything else immovable.
     auto sideFor = [&](const btCollisionObject* o) -> Side* {
         for (std::size_t i = 0; i < bodies.size(); ++i)
-            if (static_cast<const btCollisionObject*>(&r.body(static_cast<int>(i))) == o) return &bodies[i];
+            if (static_cast<const btCollisionObject*>(&r.rigidBody(static_cast<int>(i))) == o) return &bodies[i];
         return nullptr;
     };
     struct ContactSides {
@@ -241,12 +243,14 @@ void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const>
         for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
             const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
             if (c.type == figure::JointType::Spring) continue;
-            Side& a = bodies[static_cast<std::size_t>(c.body1)];
-            Side& b = c.body2 >= 0 ? bodies[static_cast<std::size_t>(c.body2)] : world;
-            if (a.body == nullptr && b.body == nullptr) continue;
-            const auto& local = r.constraintFramesLocal(i);
+            Side& a = bodies[static_cast<std::size_t>(r.rigidIndexOf(c.body1))];
+            Side& b = c.body2 >= 0 ? bodies[static_cast<std::size_t>(r.rigidIndexOf(c.body2))] : world;
+            if ((a.body == nullptr && b.body == nullptr) || &a == &b) continue; // &a == &b: merged, holds exactly
+            const auto& local = r.rigidFramesLocal(i);
             if (!std::holds_alternative<std::monostate>(c.limit))
-                corrected = projectLimit(a, b, c, framesOf(a, b, local), b.body ? b.r : spawnBasis) || corrected;
+                corrected = projectLimit(a, b, c, framesOf(a, b, local), a.r * r.bodyInRigid(c.body1).getBasis(),
+                                         b.body ? b.r * r.bodyInRigid(c.body2).getBasis() : spawnBasis) ||
+                            corrected;
             if (c.type == figure::JointType::Fixed || c.type == figure::JointType::Slider)
                 corrected = projectOrientation(a, b, framesOf(a, b, local)) || corrected;
             else if (c.type == figure::JointType::Hinge)

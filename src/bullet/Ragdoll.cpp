@@ -61,9 +61,16 @@ class Ragdoll::Action : public btActionInterface {
         for (const Friction& f : frictions)
             f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         activeTime += dt;
-        if (m_comeToRest && m_rest.update(m_owner.m_bodies, dt, activeTime)) m_owner.putToRest();
+        if (m_comeToRest && restNow(dt)) m_owner.putToRest();
     }
     void debugDraw(btIDebugDraw*) override {}
+
+    // The rest rules over the figure's bodies (a merged rigid's bodies each at its own place and velocity).
+    bool restNow(btScalar dt) {
+        if (!m_owner.merged()) return m_rest.update(m_owner.m_bodies, dt, activeTime);
+        m_owner.figureBodySamples(m_samples);
+        return m_rest.update(m_samples, dt, activeTime);
+    }
 
     void wake() {
         atRest = false;
@@ -98,10 +105,11 @@ class Ragdoll::Action : public btActionInterface {
                 finite = finite && std::isfinite(t.getOrigin()[k]) && std::isfinite(v[k]) && std::isfinite(w[k]) &&
                          std::isfinite(t.getBasis()[k][0]) && std::isfinite(t.getBasis()[k][1]) &&
                          std::isfinite(t.getBasis()[k][2]);
-            if (!finite) return trip(GuardTrip::Cause::NonFinite, static_cast<int>(i), -1, 0);
+            const int body = m_owner.m_layout->rigids[i].representative;
+            if (!finite) return trip(GuardTrip::Cause::NonFinite, body, -1, 0);
             const double speed = v.length();
             if (guard.maxSpeedMps > 0 && speed > guard.maxSpeedMps)
-                return trip(GuardTrip::Cause::Speed, static_cast<int>(i), -1, speed);
+                return trip(GuardTrip::Cause::Speed, body, -1, speed);
         }
         if (guard.maxAnchorErrorM > 0)
             for (int c = 0; c < static_cast<int>(m_owner.figure().constraints.size()); ++c) {
@@ -109,7 +117,7 @@ class Ragdoll::Action : public btActionInterface {
                 // a slider's anchors move apart along its axis by design, jointError measures it off the axis.
                 const figure::FigureConstraint& fc = m_owner.figure().constraints[static_cast<std::size_t>(c)];
                 double gap = 0;
-                if (fc.type == JointType::Spring) continue;
+                if (fc.type == JointType::Spring || m_owner.m_layout->internal[static_cast<std::size_t>(c)]) continue;
                 if (fc.type == JointType::Slider) gap = m_owner.jointError(c).anchorM;
                 else {
                     const auto [frame1, frame2] = m_owner.constraintFramesWorld(c);
@@ -160,12 +168,14 @@ class Ragdoll::Action : public btActionInterface {
     Ragdoll& m_owner;
     bool m_comeToRest;
     RestTest m_rest{m_owner.figure().rest};
+    std::vector<BodySample> m_samples;
 };
 
 Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options)
     : m_asset(std::move(asset)), m_world(world), m_method(options.method),
       m_engineFriction(options.engineContactFriction), m_spawn(options.entityTransform),
       m_action(std::make_unique<Action>(*this, options.comeToRest, options.guard, options.velocityClamp)) {
+    m_layout = &m_asset->layout(m_method.mergeFixed && m_method.backend == Backend::Rigid);
     if (m_method.backend == Backend::Multibody) {
         m_multibody = std::make_unique<detail::MultibodyRagdoll>(m_asset, world, options);
         for (std::size_t i = 0; i < figure().constraints.size(); ++i)
@@ -189,37 +199,78 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
 
-int Ragdoll::bodyCount() const { return m_multibody ? m_multibody->bodyCount() : static_cast<int>(m_bodies.size()); }
+int Ragdoll::bodyCount() const {
+    return m_multibody ? m_multibody->bodyCount() : static_cast<int>(m_layout->rigidOf.size());
+}
 
 btCollisionObject& Ragdoll::collisionObject(int i) {
     if (m_multibody) return m_multibody->collider(i);
-    return *m_bodies[static_cast<std::size_t>(i)];
+    return body(i);
 }
 
 const btCollisionObject& Ragdoll::collisionObject(int i) const {
     if (m_multibody) return m_multibody->collider(i);
-    return *m_bodies[static_cast<std::size_t>(i)];
+    return body(i);
 }
 
 std::vector<figure::BodyState> Ragdoll::bodyStates() const {
-    if (!m_multibody) return bodyStatesOf(m_bodies);
+    if (!m_multibody && !merged()) return bodyStatesOf(m_bodies);
+    std::vector<BodySample> samples;
+    if (m_multibody) samples = m_multibody->samples();
+    else figureBodySamples(samples);
     std::vector<figure::BodyState> out;
-    for (const BodySample& s : m_multibody->samples())
+    for (const BodySample& s : samples)
         out.push_back({toEigen(s.transform), toEigen(s.linearVelocity), toEigen(s.angularVelocity)});
     return out;
 }
 
-int Ragdoll::awakeBodyCount() const { return m_multibody ? m_multibody->awakeBodyCount() : awakeCountOf(m_bodies); }
+std::vector<btTransform> Ragdoll::figureBodyTransforms() const {
+    std::vector<btTransform> out;
+    out.reserve(m_layout->rigidOf.size());
+    for (std::size_t i = 0; i < m_layout->rigidOf.size(); ++i)
+        out.push_back(m_bodies[static_cast<std::size_t>(m_layout->rigidOf[i])]->getCenterOfMassTransform() *
+                      m_layout->bodyInRigidBt[i]);
+    return out;
+}
+
+// A merged body moves with its rigid: its frame is the rigid's times its offset, its centre of mass moves with
+// the rigid's velocity at that point.
+void Ragdoll::figureBodySamples(std::vector<BodySample>& out) const {
+    out.resize(m_layout->rigidOf.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const btRigidBody& r = *m_bodies[static_cast<std::size_t>(m_layout->rigidOf[i])];
+        const btTransform t = r.getCenterOfMassTransform() * m_layout->bodyInRigidBt[i];
+        out[i] = {t, r.getVelocityInLocalPoint(t.getOrigin() - r.getCenterOfMassPosition()), r.getAngularVelocity()};
+    }
+}
+
+int Ragdoll::awakeBodyCount() const {
+    if (m_multibody) return m_multibody->awakeBodyCount();
+    if (!merged()) return awakeCountOf(m_bodies);
+    int n = 0; // figure bodies: a merged rigid counts each body it carries
+    for (std::size_t k = 0; k < m_bodies.size(); ++k)
+        if (m_bodies[k]->isActive()) n += static_cast<int>(m_layout->rigids[k].bodies.size());
+    return n;
+}
 
 JointError Ragdoll::jointError(int i) const {
     if (m_multibody) return m_multibody->jointError(i);
+    if (merged()) {
+        if (m_layout->internal[static_cast<std::size_t>(i)]) return {}; // one rigid body: holds exactly
+        return jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], figureBodyTransforms(),
+                            m_frames[static_cast<std::size_t>(i)], m_spawn);
+    }
     return jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
                         m_frames[static_cast<std::size_t>(i)], m_spawn);
 }
 
 std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
-    if (!m_multibody) return bodyTransformsOf(m_bodies);
+    if (!m_multibody && !merged()) return bodyTransformsOf(m_bodies);
     std::vector<figure::Transform> out;
+    if (!m_multibody) {
+        for (const btTransform& t : figureBodyTransforms()) out.push_back(toEigen(t));
+        return out;
+    }
     for (const btTransform& t : m_multibody->transforms()) out.push_back(toEigen(t));
     return out;
 }
@@ -230,15 +281,19 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
         m_multibody->setBodyStates(states);
         return true;
     }
-    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
-        btRigidBody& b = *m_bodies[i];
-        const btTransform t = toBt(states[i].pose);
+    for (std::size_t k = 0; k < m_bodies.size(); ++k) {
+        // A merged rigid follows its representative body: frame and velocities carried to its centre of mass.
+        const std::size_t i = static_cast<std::size_t>(m_layout->rigids[k].representative);
+        btRigidBody& b = *m_bodies[k];
+        const btTransform t = toBt(states[i].pose) * m_layout->bodyInRigidBt[i].inverse();
+        const btVector3 w = toBt(states[i].angularVelocity);
+        const btVector3 v = toBt(states[i].linearVelocity) + w.cross(t.getOrigin() - toBt(states[i].pose.position));
         b.setCenterOfMassTransform(t);
         b.setInterpolationWorldTransform(t);
-        b.setLinearVelocity(toBt(states[i].linearVelocity));
-        b.setAngularVelocity(toBt(states[i].angularVelocity));
-        b.setInterpolationLinearVelocity(toBt(states[i].linearVelocity));
-        b.setInterpolationAngularVelocity(toBt(states[i].angularVelocity));
+        b.setLinearVelocity(v);
+        b.setAngularVelocity(w);
+        b.setInterpolationLinearVelocity(v);
+        b.setInterpolationAngularVelocity(w);
         m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
                                                                                 m_world.getDispatcher());
     }
@@ -257,7 +312,7 @@ bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3&
         m_multibody->applyImpulse(body, impulse, worldPoint);
         return true;
     }
-    btRigidBody& b = *m_bodies[static_cast<std::size_t>(body)];
+    btRigidBody& b = this->body(body);
     wake();
     b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
     return true;
@@ -310,11 +365,11 @@ void Ragdoll::freezeBodies() {
 void Ragdoll::thawBodies() {
     if (!m_frozen) return;
     m_frozen = false;
-    const figure::Figure& f = figure();
     for (std::size_t i = 0; i < m_bodies.size(); ++i) {
         btRigidBody& b = *m_bodies[i];
+        const RigidLayout::Rigid& r = m_layout->rigids[i];
         m_world.removeRigidBody(&b);
-        b.setMassProps(static_cast<btScalar>(f.bodies[i].massKg), toBt(f.bodies[i].inertiaKgM2));
+        b.setMassProps(static_cast<btScalar>(r.massKg), toBt(r.inertiaKgM2));
         b.updateInertiaTensor();
         m_world.addRigidBody(&b, m_group, m_masks[i]);
         b.setSleepingThresholds(0, 0);
@@ -363,11 +418,14 @@ Ragdoll::~Ragdoll() {
 void Ragdoll::addBodies(const SpawnOptions& options) {
     const figure::Figure& f = figure();
     m_group = options.collisionGroup;
-    for (std::size_t i = 0; i < f.bodies.size(); ++i) {
-        const figure::FigureBody& b = f.bodies[i];
-        btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(b.massKg), nullptr,
-                                                      m_asset->shape(static_cast<int>(i)), toBt(b.inertiaKgM2));
-        info.m_startWorldTransform = m_spawn * toBt(b.loadPose);
+    m_bodies.reserve(m_layout->rigids.size());
+    m_masks.reserve(m_layout->rigids.size());
+    for (const RigidLayout::Rigid& r : m_layout->rigids) {
+        // A merged rigid takes its heaviest body's surface and damping (the engine gives one body one value).
+        const figure::FigureBody& b = f.bodies[static_cast<std::size_t>(r.representative)];
+        btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(r.massKg), nullptr, r.shape,
+                                                      toBt(r.inertiaKgM2));
+        info.m_startWorldTransform = m_spawn * toBt(r.loadPose);
         info.m_friction = static_cast<btScalar>(b.contactFriction);
         info.m_restitution = static_cast<btScalar>(kBodyRestitution);
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
@@ -377,13 +435,17 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         if (m_method.ccd == CcdPolicy::FastBodies) {
             // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
             // fast thin limb cannot pass into or through the ground between two steps.
-            const btScalar r = static_cast<btScalar>(m_asset->innerRadius(static_cast<int>(i)));
-            body->setCcdMotionThreshold(r);
-            body->setCcdSweptSphereRadius(r);
+            const btScalar radius = static_cast<btScalar>(r.innerRadius);
+            body->setCcdMotionThreshold(radius);
+            body->setCcdSweptSphereRadius(radius);
         }
         int mask = options.collisionMask;
-        if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
-        if (b.clipMask == 0) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
+        bool tests = false;
+        for (const int i : r.bodies) {
+            if (figure::attachedToWorld(f, i)) mask &= ~btBroadphaseProxy::StaticFilter;
+            tests = tests || f.bodies[static_cast<std::size_t>(i)].clipMask != 0;
+        }
+        if (!tests) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
         if (options.engineContactFriction) {
             body->setUserIndex2(kEngineFrictionMarker);
             body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
@@ -395,7 +457,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
 }
 
 btRigidBody& Ragdoll::other(int body2) const {
-    return body2 >= 0 ? *m_bodies[static_cast<std::size_t>(body2)] : btTypedConstraint::getFixedBody();
+    return body2 >= 0 ? *m_bodies[static_cast<std::size_t>(rigidIndexOf(body2))] : btTypedConstraint::getFixedBody();
 }
 
 // Body2's frame: body-local, or world for a world constraint (model space moved by the spawn transform).
@@ -405,23 +467,43 @@ btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
 
 std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
     if (m_multibody) return m_multibody->constraintFramesWorld(i);
-    return constraintFramesWorldOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
-                                   m_frames[static_cast<std::size_t>(i)]);
+    const figure::FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
+    const auto& rigidFrames = m_rigidFrames[static_cast<std::size_t>(i)];
+    const btTransform a = body(c.body1).getCenterOfMassTransform() * rigidFrames.first;
+    const btTransform b =
+        c.body2 >= 0 ? body(c.body2).getCenterOfMassTransform() * rigidFrames.second : rigidFrames.second;
+    return {a, b};
 }
 
 void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
     const int iterations = m_method.jointIterations;
     const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
+    // At most a main constraint, its friction and a limit per joint.
+    m_frames.reserve(f.constraints.size());
+    m_rigidFrames.reserve(f.constraints.size());
+    m_main.reserve(f.constraints.size());
+    m_constraints.reserve(3 * f.constraints.size());
+    m_disablesCollision.reserve(3 * f.constraints.size());
+    m_limitRows.reserve(3 * f.constraints.size());
     const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
-    for (const FigureConstraint& c : f.constraints) {
-        btRigidBody& a = *m_bodies[static_cast<std::size_t>(c.body1)];
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        btRigidBody& a = body(c.body1);
         btRigidBody& b = other(c.body2);
-        const btTransform fa = toBt(c.frameInBody1);
-        const btTransform fb = frameOfBody2(c);
-        m_frames.emplace_back(fa, fb);
-        // Directions fixed in body2 as Bullet sees body2's frame (world for the world).
-        const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
+        m_frames.emplace_back(toBt(c.frameInBody1), frameOfBody2(c));
+        // The frames in the rigid bodies' frames (a merged body sits at an offset in its rigid).
+        const btTransform& offsetA = bodyInRigid(c.body1);
+        const btTransform fa = offsetA * m_frames.back().first;
+        const btTransform fb = c.body2 >= 0 ? bodyInRigid(c.body2) * m_frames.back().second : m_frames.back().second;
+        m_rigidFrames.emplace_back(fa, fb);
+        if (m_layout->internal[ci]) { // both bodies in one rigid: the joint holds by construction
+            m_main.push_back(nullptr);
+            continue;
+        }
+        // Directions fixed in body1 and in body2 as Bullet sees the rigid bodies' frames (world for the world).
+        const btMatrix3x3& b1Rot = offsetA.getBasis();
+        const btMatrix3x3 b2Rot = c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis();
         std::unique_ptr<btTypedConstraint> main;
         std::unique_ptr<btTypedConstraint> limit;
         btMatrix3x3 frictionAxes = fb.getBasis();
@@ -437,7 +519,7 @@ void Ragdoll::addConstraints() {
                 // half-angle: frame B's X is the cone axis (body2), frame A's X the shaft (body1), and frame A
                 // is frame B turned along the shortest arc, so the twist starts at 0.
                 const btVector3 axisB = b2Rot * toBt(cone->axisInBody2);
-                const btVector3 shaftA = toBt(cone->shaftInBody1);
+                const btVector3 shaftA = b1Rot * toBt(cone->shaftInBody1);
                 const btMatrix3x3 frameBRot = basisWithX(axisB);
                 const btTransform bWorld = b.getCenterOfMassTransform();
                 const btTransform aWorld = a.getCenterOfMassTransform();
@@ -500,7 +582,7 @@ void Ragdoll::addConstraints() {
         // Pyramid limits (ball) and every universal limit: our direction-limit rows.
         if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
             if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-                limit = std::make_unique<DirectionLimitConstraint>(a, b, toBt(p->shaftInBody1),
+                limit = std::make_unique<DirectionLimitConstraint>(a, b, b1Rot * toBt(p->shaftInBody1),
                                                                    b2Rot * toBt(p->basisInBody2),
                                                                    DirectionLimitConstraint::Shape::Pyramid,
                                                                    static_cast<btScalar>(p->halfAngle1Rad),
@@ -508,7 +590,7 @@ void Ragdoll::addConstraints() {
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
             if (cone && c.type == JointType::Universal)
                 limit =
-                    std::make_unique<DirectionLimitConstraint>(a, b, toBt(cone->shaftInBody1),
+                    std::make_unique<DirectionLimitConstraint>(a, b, b1Rot * toBt(cone->shaftInBody1),
                                                                basisWithX(b2Rot * toBt(cone->axisInBody2)),
                                                                DirectionLimitConstraint::Shape::Cone,
                                                                static_cast<btScalar>(cone->halfAngleRad), 0, policy);
@@ -537,10 +619,12 @@ void Ragdoll::addConstraints() {
                 m_disablesCollision.push_back(c.disablesCollision);
             }
         }
+        m_limitRows.resize(m_constraints.size(), false);
         if (limit) {
             m_world.addConstraint(limit.get(), false);
             m_constraints.push_back(std::move(limit));
             m_disablesCollision.push_back(false);
+            m_limitRows.push_back(true);
         }
     }
 }
@@ -548,8 +632,8 @@ void Ragdoll::addConstraints() {
 // §6.2: pairs the figure's rules keep apart, beyond those a joint already disables, and the pairs its joints keep
 // apart anyway (RagdollAsset::prunedPairs).
 void Ragdoll::filterPairs() {
-    const std::vector<std::pair<int, int>>& colliding = m_asset->contactPairs();
-    const int n = bodyCount();
+    const std::vector<std::pair<int, int>>& colliding = m_layout->contactPairs;
+    const int n = rigidBodyCount();
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {
             if (std::binary_search(colliding.begin(), colliding.end(), std::make_pair(i, j))) continue;

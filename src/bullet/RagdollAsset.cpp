@@ -8,6 +8,7 @@
 #include "PairPruning.h"
 #include "afb/bullet/Convert.h"
 #include "afb/figure/Collision.h"
+#include "afb/figure/MassProperties.h"
 #include "afb/figure/Polytope.h"
 
 namespace afb::bullet {
@@ -24,7 +25,95 @@ btAlignedObjectArray<btVector3> btPlanes(const std::vector<figure::FacePlane>& f
     return planes;
 }
 
+// Groups of bodies joined by `fixed` constraints between two bodies (union–find), by their smallest body.
+std::vector<int> fixedGroups(const figure::Figure& f) {
+    std::vector<int> root(f.bodies.size());
+    for (std::size_t i = 0; i < root.size(); ++i) root[i] = static_cast<int>(i);
+    const auto find = [&](int b) {
+        while (root[static_cast<std::size_t>(b)] != b) b = root[static_cast<std::size_t>(b)];
+        return b;
+    };
+    for (const figure::FigureConstraint& c : f.constraints) {
+        if (c.type != figure::JointType::Fixed || c.body2 < 0) continue;
+        const int a = find(c.body1), b = find(c.body2);
+        root[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    }
+    for (std::size_t i = 0; i < root.size(); ++i) root[i] = find(static_cast<int>(i));
+    return root;
+}
+
 } // namespace
+
+void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
+    const figure::Figure& f = m_figure;
+    const std::size_t n = f.bodies.size();
+    std::vector<int> group(n);
+    if (mergeFixed) group = fixedGroups(f);
+    else
+        for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<int>(i);
+    layout.rigidOf.assign(n, -1);
+    layout.bodyInRigid.assign(n, figure::Transform{});
+    layout.bodyInRigidBt.assign(n, btTransform::getIdentity());
+    for (std::size_t i = 0; i < n; ++i) {
+        if (group[i] != static_cast<int>(i)) { // joins the rigid of its group's first body
+            const int k = layout.rigidOf[static_cast<std::size_t>(group[i])];
+            layout.rigidOf[i] = k;
+            layout.rigids[static_cast<std::size_t>(k)].bodies.push_back(static_cast<int>(i));
+            continue;
+        }
+        layout.rigidOf[i] = static_cast<int>(layout.rigids.size());
+        layout.rigids.push_back({});
+        layout.rigids.back().bodies.push_back(static_cast<int>(i));
+    }
+    for (RigidLayout::Rigid& r : layout.rigids) {
+        std::vector<figure::RigidPart> parts;
+        r.representative = r.bodies.front();
+        r.innerRadius = m_innerRadii[static_cast<std::size_t>(r.bodies.front())];
+        for (const int b : r.bodies) {
+            const figure::FigureBody& body = f.bodies[static_cast<std::size_t>(b)];
+            parts.push_back({body.massKg, body.inertiaKgM2, body.loadPose});
+            if (body.massKg > f.bodies[static_cast<std::size_t>(r.representative)].massKg) r.representative = b;
+            r.innerRadius = std::min(r.innerRadius, m_innerRadii[static_cast<std::size_t>(b)]);
+        }
+        const figure::RigidPart whole = figure::combineRigidParts(parts);
+        r.massKg = whole.massKg;
+        r.inertiaKgM2 = whole.inertiaKgM2;
+        r.loadPose = whole.pose;
+        btVector3 centre;
+        btScalar radius = 0;
+        if (r.bodies.size() == 1) {
+            r.shape = m_shapes[static_cast<std::size_t>(r.bodies.front())].get();
+            r.shape->getBoundingSphere(centre, radius);
+            r.boundingRadius = radius;
+            continue;
+        }
+        // A compound of the bodies' own shapes, each at its body frame in the rigid's frame. Two to a few
+        // children: no bounding-volume tree.
+        auto compound = std::make_unique<btCompoundShape>(false, static_cast<int>(r.bodies.size()));
+        for (const int b : r.bodies) {
+            const figure::Transform inRigid = whole.pose.inverse() * f.bodies[static_cast<std::size_t>(b)].loadPose;
+            layout.bodyInRigid[static_cast<std::size_t>(b)] = inRigid;
+            layout.bodyInRigidBt[static_cast<std::size_t>(b)] = toBt(inRigid);
+            compound->addChildShape(toBt(inRigid), m_shapes[static_cast<std::size_t>(b)].get());
+        }
+        r.shape = compound.get();
+        r.shape->getBoundingSphere(centre, radius);
+        r.boundingRadius = radius;
+        m_compounds.push_back(std::move(compound));
+    }
+    for (const auto& [i, j] : m_contactPairs) {
+        int a = layout.rigidOf[static_cast<std::size_t>(i)], b = layout.rigidOf[static_cast<std::size_t>(j)];
+        if (a == b) continue;
+        if (a > b) std::swap(a, b);
+        layout.contactPairs.emplace_back(a, b);
+    }
+    std::sort(layout.contactPairs.begin(), layout.contactPairs.end());
+    layout.contactPairs.erase(std::unique(layout.contactPairs.begin(), layout.contactPairs.end()),
+                              layout.contactPairs.end());
+    for (const figure::FigureConstraint& c : f.constraints)
+        layout.internal.push_back(c.body2 >= 0 && layout.rigidOf[static_cast<std::size_t>(c.body1)] ==
+                                                      layout.rigidOf[static_cast<std::size_t>(c.body2)]);
+}
 
 std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) {
     std::shared_ptr<RagdollAsset> asset(new RagdollAsset(std::move(figure)));
@@ -61,6 +150,8 @@ std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) 
     for (const auto& pair : figure::selfCollisionPairs(asset->m_figure))
         if (!std::binary_search(asset->m_prunedPairs.begin(), asset->m_prunedPairs.end(), pair))
             asset->m_contactPairs.push_back(pair);
+    asset->buildLayout(asset->m_separate, false);
+    asset->buildLayout(asset->m_merged, true);
     return asset;
 }
 

@@ -242,7 +242,7 @@ void RagdollWorld::attach(Ragdoll& r) {
                 r.collisionObject(i).setUserIndex2(kSpeculativeFrictionMarker);
     trackJoints(r);
     m_ragdolls.push_back(&r);
-    rebuildOwners();
+    addOwners(r, static_cast<int>(m_ragdolls.size()) - 1);
 }
 
 void RagdollWorld::trackJoints(Ragdoll& r) {
@@ -253,10 +253,8 @@ void RagdollWorld::trackJoints(Ragdoll& r) {
             // face of a pyramid it stands for can change from one step to the next with the same row count.
             // Warm-started (in full or at half the factor), they pushed a resting humanoid's upper arm 1.7–2.4 cm
             // into the ground, against 3 mm without (README: Methods).
-            const btTypedConstraint& c = r.bulletConstraint(k);
-            if (dynamic_cast<const DirectionLimitConstraint*>(&c) || dynamic_cast<const HingeRangeConstraint*>(&c))
-                continue;
-            solver->track(c, r.method().jointWarmStarting, r.method().directJoints);
+            if (r.bulletConstraintIsLimit(k)) continue;
+            solver->track(r.bulletConstraint(k), r.method().jointWarmStarting, r.method().directJoints);
         }
 }
 
@@ -269,23 +267,45 @@ void RagdollWorld::restartWarmStarting(Ragdoll& r) {
 void RagdollWorld::detach(Ragdoll& r) {
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
-    m_ragdolls.erase(std::remove(m_ragdolls.begin(), m_ragdolls.end(), &r), m_ragdolls.end());
-    rebuildOwners();
+    const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
+    if (it == m_ragdolls.end()) return;
+    const int gone = static_cast<int>(it - m_ragdolls.begin());
+    m_ragdolls.erase(it);
+    // Its bodies leave the owner table, later ragdolls move down one place: no re-sort, no shape queries.
+    m_owners.erase(std::remove_if(m_owners.begin(), m_owners.end(),
+                                  [&](const BodyOwner& o) { return o.ragdoll == gone; }),
+                   m_owners.end());
+    for (BodyOwner& o : m_owners)
+        if (o.ragdoll > gone) --o.ragdoll;
 }
 
-void RagdollWorld::rebuildOwners() {
-    m_owners.clear();
-    for (std::size_t k = 0; k < m_ragdolls.size(); ++k)
-        for (int i = 0; i < m_ragdolls[k]->bodyCount(); ++i) {
-            const btCollisionObject& body = m_ragdolls[k]->collisionObject(i);
+// The ragdoll's collision objects (one per rigid body: merged bodies share one) join the sorted owner table: sorted
+// among themselves and merged in, so a spawn costs its own bodies, not the world's.
+void RagdollWorld::addOwners(Ragdoll& r, int index) {
+    const auto byBody = [](const BodyOwner& x, const BodyOwner& y) {
+        return std::less<const btCollisionObject*>()(x.body, y.body);
+    };
+    const std::size_t before = m_owners.size();
+    if (r.backend() == Backend::Rigid) {
+        for (int k = 0; k < r.rigidBodyCount(); ++k) // radii from the asset
+            m_owners.push_back({&r.rigidBody(k), index,
+                                static_cast<btScalar>(r.layout().rigids[static_cast<std::size_t>(k)].boundingRadius)});
+    } else {
+        for (int i = 0; i < r.bodyCount(); ++i) {
+            const btCollisionObject& body = r.collisionObject(i);
             btVector3 centre;
             btScalar radius = 0;
             body.getCollisionShape()->getBoundingSphere(centre, radius);
-            m_owners.push_back({&body, static_cast<int>(k), radius});
+            m_owners.push_back({&body, index, radius});
         }
-    std::sort(m_owners.begin(), m_owners.end(), [](const BodyOwner& x, const BodyOwner& y) {
-        return std::less<const btCollisionObject*>()(x.body, y.body);
-    });
+    }
+    const auto mid = m_owners.begin() + static_cast<std::ptrdiff_t>(before);
+    std::sort(mid, m_owners.end(), byBody);
+    m_owners.erase(std::unique(mid, m_owners.end(),
+                               [](const BodyOwner& x, const BodyOwner& y) { return x.body == y.body; }),
+                   m_owners.end());
+    std::inplace_merge(m_owners.begin(), m_owners.begin() + static_cast<std::ptrdiff_t>(before), m_owners.end(),
+                       byBody);
 }
 
 } // namespace afb::bullet

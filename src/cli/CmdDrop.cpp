@@ -1,4 +1,5 @@
 // afb drop: drop figures onto a ground plane and report speed, accuracy and stability.
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <fstream>
@@ -30,6 +31,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         std::filesystem::path gltf;
         double gravity = 9.81;
         bool doomGravity = false, noSleep = false, strict = false;
+        std::optional<int> worlds;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("entities", opt->entities, "entityDefs to drop")->required();
@@ -37,8 +39,13 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
     cmd->add_option("--height", opt->drop.heightM, "Height of each figure's lowest point at spawn, m")
         ->capture_default_str();
     cmd->add_option("--count", opt->drop.count, "Instances per figure, on a grid in one world")->capture_default_str();
-    cmd->add_option("--threads", opt->drop.worlds, "Split the instances over this many worlds, one thread each")
-        ->capture_default_str();
+    cmd->add_option("--threads", opt->drop.threads,
+                    "Run the worlds on this many threads (default 1; alone, also splits into that many worlds)")
+        ->check(CLI::Range(1, 1024));
+    cmd->add_option("--worlds", opt->worlds,
+                    "Split the instances over this many independent worlds (default: --threads); the results "
+                    "do not depend on --threads")
+        ->check(CLI::Range(1, 1 << 20));
     cmd->add_option("--seed", opt->seed,
                     "Random initial orientations (yaw and tilt) from this seed; default: yaw 37°·i");
     cmd->add_option("--seconds", opt->drop.seconds, "Simulated time, s")->capture_default_str();
@@ -86,6 +93,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         opt->drop.seed = opt->seed;
         opt->drop.steps = opt->steps;
         opt->drop.sleeping = !opt->noSleep;
+        opt->drop.worlds = opt->worlds.value_or(std::max(1, opt->drop.threads)); // --threads N alone: N worlds
         figure::UnitSystem units;
         units.gravityMps2 = opt->doomGravity ? units.doomGravityMps2() : opt->gravity;
         text::Diagnostics diags;
@@ -152,7 +160,8 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         nlohmann::json all = {{"bullet", sim::bulletVersion()},
                               {"precision", sim::bulletPrecision()},
                               {"gravity_mps2", units.gravityMps2},
-                              {"threads", opt->drop.worlds},
+                              {"threads", opt->drop.threads > 0 ? opt->drop.threads : 1},
+                              {"worlds", opt->drop.worlds},
                               {"scenario", sim::dropOptionsJson(opt->drop)},
                               {"runs", nlohmann::json::array()}};
         for (const sim::DropResult& r : results) all["runs"].push_back(sim::dropResultJson(r));

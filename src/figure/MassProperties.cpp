@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
 
 namespace afb::figure {
 
@@ -87,6 +90,37 @@ MassProperties computeClipModelMassProperties(const Polytope& polytope, double d
         result.zeroVolumeFallback = true;
     }
     return result;
+}
+
+RigidPart combineRigidParts(std::span<const RigidPart> parts) {
+    if (parts.size() == 1) return parts.front();
+    RigidPart out;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+    for (const RigidPart& p : parts) {
+        out.massKg += p.massKg;
+        moment += p.massKg * p.pose.position;
+    }
+    const Eigen::Vector3d com = out.massKg != 0 ? Eigen::Vector3d(moment / out.massKg) : Eigen::Vector3d::Zero();
+    // Each part's tensor turned into the common frame (R I Rᵀ), moved to the union's centre of mass
+    // (parallel axes: + m (|d|² 1 − d dᵀ)).
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    for (const RigidPart& p : parts) {
+        const Eigen::Vector3d d = p.pose.position - com;
+        inertia += p.pose.rotation * p.inertiaKgM2.asDiagonal() * p.pose.rotation.transpose() +
+                   p.massKg * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    }
+    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d moments = inertia.diagonal();
+    const double offDiagonal = std::abs(inertia(0, 1)) + std::abs(inertia(0, 2)) + std::abs(inertia(1, 2));
+    if (offDiagonal > 1e-15 * inertia.diagonal().cwiseAbs().maxCoeff()) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(inertia);
+        axes = eig.eigenvectors();
+        if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+        moments = eig.eigenvalues();
+    }
+    out.inertiaKgM2 = moments;
+    out.pose = Transform{axes, com};
+    return out;
 }
 
 } // namespace afb::figure

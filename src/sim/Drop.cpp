@@ -229,15 +229,19 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     }
 
     std::vector<Partial> parts(static_cast<std::size_t>(worlds));
+    const int threadCount = std::clamp(o.threads > 0 ? o.threads : worlds, 1, worlds);
+    // Thread t runs worlds t, t + threadCount, …, one after the other; this thread is thread 0 (world 0, the
+    // observed one). Each world is stepped alone, so the split over threads changes nothing in the results.
+    const auto runThread = [&](int t) {
+        for (int w = t; w < worlds; w += threadCount)
+            parts[static_cast<std::size_t>(w)] = runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], w == 0,
+                                                          steps, w == 0 && observer ? &observer : nullptr);
+    };
     const auto wall0 = std::chrono::steady_clock::now();
     {
         std::vector<std::thread> threads;
-        for (int w = 1; w < worlds; ++w)
-            threads.emplace_back([&, w] {
-                parts[static_cast<std::size_t>(w)] =
-                    runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], false, steps, nullptr);
-            });
-        parts[0] = runWorld(asset, o, perWorld[0], true, steps, observer ? &observer : nullptr);
+        for (int t = 1; t < threadCount; ++t) threads.emplace_back(runThread, t);
+        runThread(0);
         for (std::thread& t : threads) t.join();
     }
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -248,7 +252,12 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     r.method = o.method;
     r.bodies = static_cast<int>(figure.bodies.size()) * count;
     r.constraints = static_cast<int>(figure.constraints.size()) * count;
-    double stepSeconds = parts[0].stepSeconds, cpuSeconds = 0, awakeCpuSeconds = 0, lastRest = 0;
+    // Step time: the worlds of one thread one after the other, the threads side by side.
+    std::vector<double> threadStepSeconds(static_cast<std::size_t>(threadCount), 0.0);
+    for (int w = 0; w < worlds; ++w)
+        threadStepSeconds[static_cast<std::size_t>(w % threadCount)] += parts[static_cast<std::size_t>(w)].stepSeconds;
+    double stepSeconds = *std::max_element(threadStepSeconds.begin(), threadStepSeconds.end());
+    double cpuSeconds = 0, awakeCpuSeconds = 0, lastRest = 0;
     double worstAnchor = parts[0].worstAnchor, worstLimit = parts[0].worstLimit;
     bool allRested = true;
     for (std::size_t w = 0; w < parts.size(); ++w) {
@@ -275,7 +284,6 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
             if (p.exploded && (!r.exploded || *p.explodedAtS < *r.explodedAtS)) r.explodedAtS = p.explodedAtS;
             r.exploded = r.exploded || p.exploded;
             r.nonFinite = r.nonFinite || p.nonFinite;
-            stepSeconds = std::max(stepSeconds, parts[w].stepSeconds); // worlds run side by side
         }
         for (double t : parts[w].restTimes) {
             allRested = allRested && t >= 0;
@@ -285,7 +293,7 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     if (allRested && r.steps > 0) r.settleTimeS = lastRest;
     r.wallMs = wallSeconds * 1000.0;
     r.usPerStep = r.steps > 0 ? stepSeconds * 1e6 / r.steps : 0;
-    r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * worlds / r.bodies : 0;
+    r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * threadCount / r.bodies : 0;
     r.stepCpuMs = cpuSeconds * 1000.0;
     r.awakeStepCpuMs = awakeCpuSeconds * 1000.0;
     r.cpuUsPerAwakeBodyStep = r.awakeBodySteps > 0 ? awakeCpuSeconds * 1e6 / static_cast<double>(r.awakeBodySteps) : 0;

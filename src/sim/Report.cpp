@@ -30,7 +30,7 @@ const std::vector<Field>& fields() {
         {"steps", "frames stepped", [](const DropResult& r) { return json(r.steps); }},
         {"wall_ms", "wall time of the whole run", [](const DropResult& r) { return json(r.wallMs); }},
         {"us_per_step", "stepping only, the slowest world", [](const DropResult& r) { return json(r.usPerStep); }},
-        {"us_per_body_step", "us_per_step × worlds / bodies",
+        {"us_per_body_step", "us_per_step × threads / bodies",
          [](const DropResult& r) { return json(r.usPerBodyStep); }},
         {"awake_body_steps", "body-steps not asleep", [](const DropResult& r) { return json(r.awakeBodySteps); }},
         {"step_cpu_ms", "thread CPU time inside the steps, all worlds",

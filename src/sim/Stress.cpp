@@ -94,9 +94,10 @@ double groundAllowanceJ(const std::vector<std::unique_ptr<Doll>>& dolls, double 
     double allowance = 0;
     for (const auto& d : dolls) {
         double lowest = 0, mass = 0;
+        const std::vector<figure::Transform> frames = d->bodyTransforms(); // body frames (merged bodies too)
         for (int i = 0; i < d->bodyCount(); ++i) {
             const figure::FigureBody& body = d->figure().bodies[static_cast<std::size_t>(i)];
-            const btTransform t = d->body(i).getCenterOfMassTransform();
+            const btTransform t = bullet::toBt(frames[static_cast<std::size_t>(i)]);
             mass += body.massKg;
             for (const Eigen::Vector3d& v : body.shape.vertices)
                 lowest = std::min(lowest, static_cast<double>((t * bullet::toBt(v)).z()));

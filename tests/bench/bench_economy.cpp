@@ -5,11 +5,12 @@
 //   BM_Rest/<method>   160 humanoids dropped 1 m, 10 s, sleeping on: CPU µs per body-step, awake or not
 //   BM_Crowd/<method>/<resting>  10 humanoids dropped 1 m beside <resting> humanoids spawned at rest (standing on
 //                      the ground, never touched), 120 steps: CPU µs per step (counter us_per_step)
-//   BM_Spawn/<method>  spawning one built figure into a world that holds 100 of it already: µs per ragdoll
+//   BM_Spawn/<method>  spawning one built figure into a world that holds 100 of it already: µs per ragdoll,
+//                      and removing it (apart); heap bytes per live instance
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
-// solve contacts and joints with 20), default, fast. After the runs, a table of the ratios to raw is printed.
-// Time is thread CPU time (other processes do not count); instruction counts, exact from run to run, come from
-// cmake/callgrind-cost.sh.
+// solve contacts and joints with 20), default, default:merge-fixed (fixed wrists merged), fast. After the runs, a table
+// of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction counts, exact
+// from run to run, come from cmake/callgrind-cost.sh.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -59,9 +60,12 @@ struct Labelled {
 std::vector<Labelled> methods() {
     Method rawEqual = afb::sim::rawMethod();
     rawEqual.iterations = 20;
+    Method merged = *afb::bullet::methodPreset("default");
+    merged.mergeFixed = true;
     return {{"raw", afb::sim::rawMethod()},
             {"raw:iterations=20", rawEqual},
             {"default", *afb::bullet::methodPreset("default")},
+            {"default:merge-fixed", merged},
             {"fast", *afb::bullet::methodPreset("fast")}};
 }
 
@@ -209,24 +213,34 @@ void spawnBenchmark(benchmark::State& state, const Method& method, const char* l
     }
     Drop drop(method, 100, 1.0, true);
     const auto asset = humanoid();
-    double cpu = 0;
+    // Spawns are timed one by one; every 16 live ones are removed together, timed apart (removal is Bullet's
+    // linear search of the world's object and constraint arrays and its pair cache: it grows with the world).
+    std::vector<std::unique_ptr<afb::bullet::Ragdoll>> live;
+    std::vector<std::unique_ptr<afb::sim::RawRagdoll>> liveRaw;
+    double spawnCpu = 0, removalCpu = 0;
     long long spawned = 0;
+    const auto removeAll = [&] {
+        const double c0 = threadCpuSeconds();
+        live.clear();
+        liveRaw.clear();
+        removalCpu += threadCpuSeconds() - c0;
+    };
     for (auto _ : state) {
         afb::bullet::SpawnOptions o;
-        o.entityTransform.setOrigin(btVector3(-5, -5, 1));
+        o.entityTransform.setOrigin(btVector3(btScalar(-5 - 3 * (spawned % 16)), -5, 1));
         const double c0 = threadCpuSeconds();
-        if (afb::sim::isRaw(method)) {
-            afb::sim::RawRagdoll r(asset, drop.scene.world(), o);
-            benchmark::DoNotOptimize(r.bodyCount());
-        } else {
-            afb::bullet::Ragdoll r(asset, drop.scene.ragdollWorld(), o);
-            benchmark::DoNotOptimize(r.bodyCount());
-        }
-        cpu += threadCpuSeconds() - c0;
+        if (afb::sim::isRaw(method))
+            liveRaw.push_back(std::make_unique<afb::sim::RawRagdoll>(asset, drop.scene.world(), o));
+        else live.push_back(std::make_unique<afb::bullet::Ragdoll>(asset, drop.scene.ragdollWorld(), o));
+        spawnCpu += threadCpuSeconds() - c0;
         ++spawned;
+        if (live.size() + liveRaw.size() == 16) removeAll();
     }
-    state.counters["us_per_ragdoll"] = cpu * 1e6 / static_cast<double>(spawned); // spawn and removal
-    results()["spawn"][label] = cpu * 1e6 / static_cast<double>(spawned);
+    removeAll();
+    state.counters["us_spawn"] = spawnCpu * 1e6 / static_cast<double>(spawned);
+    state.counters["us_removal"] = removalCpu * 1e6 / static_cast<double>(spawned);
+    results()["spawn"][label] = spawnCpu * 1e6 / static_cast<double>(spawned);
+    results()["removal"][label] = removalCpu * 1e6 / static_cast<double>(spawned);
     // Heap held per live instance (the asset's shapes are shared and not counted): 100 more spawned and kept.
     {
         Drop more(method, 0, 1.0, true, 0);
@@ -280,10 +294,11 @@ void printRatios() {
         const auto raw = byLabel.find("raw");
         if (raw == byLabel.end() || raw->second <= 0) continue;
         std::printf("\n%s: %s, and the ratio to raw (plain Bullet's defaults)\n", family.c_str(),
-                    family == "spawn"    ? "CPU µs per ragdoll (spawn + removal)"
-                    : family == "memory" ? "heap bytes per live instance, after one step"
-                    : family == "rest"   ? "CPU µs per body-step (160 humanoids, 10 s, sleeping on)"
-                                         : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
+                    family == "spawn"     ? "CPU µs to spawn a ragdoll (into a world of 100)"
+                    : family == "removal" ? "CPU µs to remove a ragdoll (from a world of 100)"
+                    : family == "memory"  ? "heap bytes per live instance, after one step"
+                    : family == "rest"    ? "CPU µs per body-step (160 humanoids, 10 s, sleeping on)"
+                                          : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
         for (const auto& [label, value] : byLabel)
             std::printf("  %-20s %8.3f  %5.2fx raw\n", label.c_str(), value, value / raw->second);
         const auto equal = byLabel.find("raw:iterations=20");

@@ -225,12 +225,12 @@ TEST_CASE("economy: a frozen ragdoll wakes on an impulse, whole, with its mass a
     CHECK_FALSE(r.atRest());
     CHECK_FALSE(r.frozen());
     CHECK(scene.world().getNumConstraints() == constraintsBefore + r.bulletConstraintCount());
-    for (int i = 0; i < r.bodyCount(); ++i) {
-        const figure::FigureBody& b = loaded.figure.bodies[static_cast<std::size_t>(i)];
-        CHECK(r.body(i).getInvMass() == Approx(1.0 / b.massKg).epsilon(1e-6));
-        CHECK(r.body(i).getLocalInertia().x() == Approx(b.inertiaKgM2.x()).epsilon(1e-6));
-        CHECK(r.body(i).isActive());
-        CHECK_FALSE(r.body(i).isStaticOrKinematicObject());
+    for (int k = 0; k < r.rigidBodyCount(); ++k) { // merged hands and forearms: their compound's mass
+        const bullet::RigidLayout::Rigid& b = r.layout().rigids[static_cast<std::size_t>(k)];
+        CHECK(r.rigidBody(k).getInvMass() == Approx(1.0 / b.massKg).epsilon(1e-6));
+        CHECK(r.rigidBody(k).getLocalInertia().x() == Approx(b.inertiaKgM2.x()).epsilon(1e-6));
+        CHECK(r.rigidBody(k).isActive());
+        CHECK_FALSE(r.rigidBody(k).isStaticOrKinematicObject());
     }
     const btVector3 start = r.body(body).getCenterOfMassPosition();
     for (int s = 0; s < 10; ++s) scene.step(1.0 / 60);

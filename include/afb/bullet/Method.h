@@ -101,6 +101,12 @@ struct Method {
     /// be a RagdollSolver; set for the world by RagdollWorld from its method (a ragdoll takes part when its own
     /// method has it on).
     bool directJoints = false;
+    /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
+    /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
+    /// nothing and cannot give. Every figure body keeps its pose (bodyTransforms, the skeleton). Rigid backend only.
+    /// Off by default: Bullet's compound algorithm tests a child only where its bounding box overlaps the other
+    /// body's, so a merged body's speculative contacts start late (README: Economy).
+    bool mergeFixed = false;
 
     friend bool operator==(const Method&, const Method&) = default;
 };

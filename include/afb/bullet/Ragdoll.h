@@ -148,15 +148,28 @@ class Ragdoll {
     btCollisionObject& collisionObject(int i);
     const btCollisionObject& collisionObject(int i) const;
     /// Rigid body of figure body `i` (rigid backend only); its transform is the body frame (centre of mass,
-    /// principal axes).
-    btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(i)]; }
-    const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(i)]; }
-    /// The main Bullet constraint of figure constraint `i`.
+    /// principal axes), unless the body was merged with others (Method::mergeFixed): then it is their compound,
+    /// whose frame is the union's (bodyInRigid(i) places the body in it).
+    btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
+    const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
+    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed.
+    int rigidBodyCount() const { return static_cast<int>(m_bodies.size()); }
+    btRigidBody& rigidBody(int k) { return *m_bodies[static_cast<std::size_t>(k)]; }
+    const btRigidBody& rigidBody(int k) const { return *m_bodies[static_cast<std::size_t>(k)]; }
+    /// The rigid body (index for rigidBody) carrying figure body `i`.
+    int rigidIndexOf(int i) const { return m_layout->rigidOf[static_cast<std::size_t>(i)]; }
+    /// Figure body `i`'s frame in its rigid body's frame (identity unless merged).
+    const btTransform& bodyInRigid(int i) const { return m_layout->bodyInRigidBt[static_cast<std::size_t>(i)]; }
+    /// How the figure's bodies map to rigid bodies (the asset's, for this ragdoll's method).
+    const RigidLayout& layout() const { return *m_layout; }
+    /// The main Bullet constraint of figure constraint `i` (null for a fixed constraint inside a merged body).
     btTypedConstraint* constraint(int i) { return m_main[static_cast<std::size_t>(i)]; }
     const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); rigid
     /// backend only (0 for a multibody ragdoll).
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
+    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint).
+    bool bulletConstraintIsLimit(int k) const { return m_limitRows[static_cast<std::size_t>(k)]; }
     /// Bullet constraint `k` of those, in the order they were added to the world.
     btTypedConstraint& bulletConstraint(int k) { return *m_constraints[static_cast<std::size_t>(k)]; }
     const btTypedConstraint& bulletConstraint(int k) const { return *m_constraints[static_cast<std::size_t>(k)]; }
@@ -169,6 +182,11 @@ class Ragdoll {
     const std::pair<btTransform, btTransform>& constraintFramesLocal(int i) const {
         return m_frames[static_cast<std::size_t>(i)];
     }
+    /// The same frames in the frames of the two rigid bodies (rigidIndexOf(body1), rigidIndexOf(body2)), as the
+    /// Bullet constraints hold them; equal to constraintFramesLocal unless a body was merged.
+    const std::pair<btTransform, btTransform>& rigidFramesLocal(int i) const {
+        return m_rigidFrames[static_cast<std::size_t>(i)];
+    }
 
     /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
     using JointError = bullet::JointError;
@@ -178,7 +196,7 @@ class Ragdoll {
     std::vector<figure::Transform> bodyTransforms() const;
     /// World transforms and velocities of every body.
     std::vector<figure::BodyState> bodyStates() const;
-    /// Bodies Bullet is simulating now (not asleep).
+    /// Figure bodies Bullet is simulating now (not asleep; a merged rigid counts each body it carries).
     int awakeBodyCount() const;
     /// Places every body (one state per body, in body order) and sets its velocities, e.g. from an animation
     /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll. Returns false and changes
@@ -236,23 +254,28 @@ class Ragdoll {
     void thawBodies();
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
+    bool merged() const { return m_layout->rigids.size() != m_layout->rigidOf.size(); }
+    std::vector<btTransform> figureBodyTransforms() const; ///< every figure body's frame, world
+    void figureBodySamples(std::vector<BodySample>& out) const;
 
     std::shared_ptr<const RagdollAsset> m_asset;
+    const RigidLayout* m_layout = nullptr; ///< the asset's, for m_method.mergeFixed
     btDynamicsWorld& m_world;
     RagdollWorld* m_manager = nullptr; ///< the RagdollWorld it was spawned through, if any
     Method m_method;
     bool m_engineFriction = false;
     btTransform m_spawn;
-    std::vector<std::unique_ptr<btRigidBody>> m_bodies;
+    std::vector<std::unique_ptr<btRigidBody>> m_bodies;            ///< one per rigid of m_layout
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
     std::vector<bool> m_disablesCollision; ///< per Bullet constraint: added with collision between its bodies off
+    std::vector<bool> m_limitRows;         ///< per Bullet constraint: one of our limit constraints
     int m_group = 0;                       ///< collision group of every body
-    std::vector<int> m_masks;              ///< collision mask of each body
+    std::vector<int> m_masks;              ///< collision mask of each rigid body
     bool m_frozen = false;                 ///< see frozen()
     FrozenContact m_frozenContact;
     std::vector<btTypedConstraint*> m_main;
     std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
-                                                               ///< ///< per figure constraint
+    std::vector<std::pair<btTransform, btTransform>> m_rigidFrames; ///< see rigidFramesLocal
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
     std::unique_ptr<detail::MultibodyRagdoll> m_multibody; ///< the multibody backend, or null for the rigid one

@@ -16,6 +16,33 @@ namespace afb::bullet {
 /// min(kMaxMarginM, 0.2 × the smallest distance from the centre of mass to a face).
 inline constexpr double kMaxMarginM = 0.01;
 
+/// How a ragdoll's figure bodies become Bullet rigid bodies: one each, or with the bodies joined by `fixed`
+/// constraints merged into one (Method::mergeFixed). Computed once per figure, shared by every instance.
+struct RigidLayout {
+    /// One Bullet rigid body.
+    struct Rigid {
+        std::vector<int> bodies; ///< the figure bodies it carries, ascending
+        /// The heaviest of them (lowest index on ties): its friction, damping and restitution are the rigid's.
+        int representative = 0;
+        double massKg = 0;
+        Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Zero(); ///< principal moments (figure::combineRigidParts)
+        figure::Transform loadPose; ///< the rigid's frame (centre of mass, principal axes), model space, load pose
+        btCollisionShape* shape = nullptr; ///< the body's own shape, or a btCompoundShape of its bodies' (the asset's)
+        /// Radius of its continuous-collision sphere: the smallest inner radius of its bodies, metres.
+        double innerRadius = 0;
+        /// Bullet's bounding sphere radius of the shape (btCollisionShape::getBoundingSphere), metres.
+        double boundingRadius = 0;
+    };
+    std::vector<Rigid> rigids;
+    std::vector<int> rigidOf;                   ///< per figure body: index into rigids
+    std::vector<figure::Transform> bodyInRigid; ///< per figure body: its body frame in its rigid's frame
+    std::vector<btTransform> bodyInRigidBt;     ///< the same in Bullet's precision
+    /// Rigid pairs (i < j, ascending) that test contact: those with a figure pair in RagdollAsset::contactPairs.
+    std::vector<std::pair<int, int>> contactPairs;
+    /// Whether figure constraint `i` joins two bodies of one rigid (then it has no Bullet constraint).
+    std::vector<bool> internal;
+};
+
 /// A figure plus its Bullet collision shapes. Immutable once made; share it between any number of ragdolls
 /// (one per Bullet precision: this type is compiled against the linked Bullet's btScalar).
 class RagdollAsset {
@@ -42,6 +69,9 @@ class RagdollAsset {
     /// bodies, within the joints' limits widened by 10° each, they stay more than 2 cm apart, so a ragdoll never
     /// tests them for contact. Computed once per figure (issue 12).
     const std::vector<std::pair<int, int>>& prunedPairs() const { return m_prunedPairs; }
+    /// The figure's bodies as Bullet rigid bodies: one each, or (`mergeFixed`) with bodies joined by `fixed`
+    /// constraints between two bodies merged into one compound.
+    const RigidLayout& layout(bool mergeFixed) const { return mergeFixed ? m_merged : m_separate; }
 
   private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
@@ -51,6 +81,10 @@ class RagdollAsset {
     std::vector<double> m_innerRadii;
     std::vector<std::pair<int, int>> m_contactPairs;
     std::vector<std::pair<int, int>> m_prunedPairs;
+    std::vector<std::unique_ptr<btCollisionShape>> m_compounds; ///< of m_merged's rigids of several bodies
+    RigidLayout m_separate;
+    RigidLayout m_merged;
+    void buildLayout(RigidLayout& layout, bool mergeFixed);
 };
 
 } // namespace afb::bullet

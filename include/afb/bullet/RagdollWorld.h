@@ -63,7 +63,7 @@ class RagdollWorld {
 
   private:
     class PositionAction;
-    void rebuildOwners();
+    void addOwners(Ragdoll& ragdoll, int index);
     void trackJoints(Ragdoll& ragdoll);
 
     btDiscreteDynamicsWorld& m_world;

@@ -1,9 +1,12 @@
 #pragma once
 // Exact mass properties of a polytope of uniform density (af-format §3.2), and the engine's clip-model rule
 // for zero-volume shapes. Units follow the inputs: lengths in the polytope's unit L, density in mass per L³.
+#include <span>
+
 #include <Eigen/Geometry>
 
 #include "afb/figure/Polytope.h"
+#include "afb/figure/Transform.h"
 
 namespace afb::figure {
 
@@ -34,5 +37,18 @@ MassProperties computeMassProperties(const Polytope& polytope, double density);
 /// zeroVolumeFallback set. Negative or otherwise invalid masses are left to the body's SetDensity rule
 /// (§3.3).
 MassProperties computeClipModelMassProperties(const Polytope& polytope, double density);
+
+/// One rigid body as a part of a rigid union: its mass, its principal moments and its body frame (centre of mass,
+/// principal axes) in a frame common to every part.
+struct RigidPart {
+    double massKg = 0;
+    Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Zero(); ///< principal moments about the body frame's axes
+    Transform pose;                                        ///< body frame in the common frame
+};
+
+/// Parts joined rigidly (bodies held by `fixed` constraints, merged into one rigid body): total mass, the union's
+/// frame (centre of mass, principal axes, right-handed) in the common frame and its principal moments (ascending
+/// unless the summed tensor is already diagonal). Parallel-axis theorem in double; one part comes back unchanged.
+RigidPart combineRigidParts(std::span<const RigidPart> parts);
 
 } // namespace afb::figure

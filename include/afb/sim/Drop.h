@@ -16,9 +16,12 @@ namespace afb::sim {
 /// A drop scenario: where and how long. How the figure is stepped is the method. Times in seconds, lengths in
 /// metres.
 struct DropOptions {
-    double heightM = 1.0;              ///< lowest point of each figure above the ground at spawn
-    int count = 1;                     ///< instances of the figure, on a grid in one world (or split over worlds)
-    int worlds = 1;                    ///< independent worlds the instances are split over, each on its own thread
+    double heightM = 1.0; ///< lowest point of each figure above the ground at spawn
+    int count = 1;        ///< instances of the figure, on a grid in one world (or split over worlds)
+    int worlds = 1;       ///< independent worlds the instances are split over (instance i: world i mod worlds)
+    /// Threads that run the worlds (0: one per world); world w runs on thread w mod threads. The results do not
+    /// depend on it: each world is stepped alone, and the worlds' results are combined in world order.
+    int threads = 0;
     std::optional<std::uint32_t> seed; ///< random initial orientations (yaw and a tilt); none: yaw = 37°·i
     double seconds = 10.0;             ///< simulated time (ignored when steps is set)
     std::optional<int> steps;          ///< exact number of steps; 0 reports the spawn pose
