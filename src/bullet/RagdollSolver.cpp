@@ -2,8 +2,12 @@
 #include "afb/bullet/RagdollSolver.h"
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 
 #include <Eigen/Dense>
+
+#include "BlockTree.h"
 
 namespace afb::bullet {
 
@@ -54,7 +58,12 @@ struct RagdollSolver::Direct {
         std::vector<int> bodies; // solver body ids
         std::vector<JointRow> rows;
         std::vector<std::vector<std::pair<int, int>>> rowsAt; // per local body: (joint row, side 0 = A / 1 = B)
-        Eigen::LDLT<Mat> ldlt;
+        Eigen::LDLT<Mat> ldlt; // the dense factor, when the tree's cannot be used (a loop, two world joints)
+        // The sparse factor: the bodies (nodes 0…n−1) and one node per jointed body pair (its rows), a tree when
+        // the figure has no loop. H = [[M, −Jᵀ], [−J, −C]]; `rowAt` is each joint row's entry in its vectors.
+        BlockTree tree;
+        bool useTree = false;
+        std::vector<int> rowAt;
         Vec cfm;           // C's diagonal
         Vec lambda;        // the rows' accumulated impulses (without the reactions to free rows unless `soft`)
         bool soft = false; // a row has a cfm: its reactions are kept up to date (the block solve needs them)
@@ -63,7 +72,7 @@ struct RagdollSolver::Direct {
     struct FreeRow {
         btSolverConstraint* c = nullptr;
         int group[2] = {-1, -1};     // group of side A, of side B (−1: a plain body)
-        int response[2] = {-1, -1};  // offsets in `responses` (6 per group body), per distinct group
+        int response[2] = {-1, -1};  // offsets in `responses` (linear, angular per group body), per distinct group
         int reaction[2] = {-1, -1};  // offsets in `reactions` (one per group joint row)
         double invEffectiveMass = 0; // 1 / (Jᵣ u + cfm′), 0: skip
         double cfmVel = 0;           // the row's cfm in velocity units
@@ -71,11 +80,16 @@ struct RagdollSolver::Direct {
         btScalar start = 0;          // the row's impulse before the iterations (warm start)
     };
 
+    static bool factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool, double epsilon);
+
     bool enabled = false;
     std::vector<Group> groups;
     std::vector<int> groupOf, localOf; // per solver body
     std::vector<FreeRow> nonContact, contact, friction;
-    std::vector<double> responses, reactions;
+    std::vector<btVector3> responses; // M⁻¹-weighted velocity change per unit impulse, per group body
+    std::vector<double> reactions;
+    std::vector<double> response; // one response being computed, 6 per group body
+    std::vector<double> scratch;
     std::vector<char> bilateral; // per non-contact pool row: in a group's block
 
     void clear() {
@@ -87,6 +101,96 @@ struct RagdollSolver::Direct {
         reactions.clear();
     }
 };
+
+// The group's H as a tree of body and joint nodes, factored (BlockTree). False when the group has a loop, more
+// than one joint to the world (a leaf joint's pivot would be −C, zero), a body whose inertia cannot be inverted, or
+// a pivot that is singular: the caller then factors A + C densely.
+bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool,
+                                       double epsilon) {
+    const int bodies = static_cast<int>(group.bodies.size());
+    std::map<std::pair<int, int>, int> nodeOf; // body pair (−1: the world) → joint node
+    std::vector<std::vector<int>> nodeRows;
+    std::vector<std::pair<int, int>> pairs;
+    for (std::size_t i = 0; i < group.rows.size(); ++i) {
+        const JointRow& row = group.rows[i];
+        const std::pair<int, int> key{std::min(row.bodyA, row.bodyB), std::max(row.bodyA, row.bodyB)};
+        const auto [it, added] = nodeOf.try_emplace(key, static_cast<int>(nodeRows.size()));
+        if (added) {
+            nodeRows.emplace_back();
+            pairs.push_back(key);
+        }
+        nodeRows[static_cast<std::size_t>(it->second)].push_back(static_cast<int>(i));
+    }
+    const int nodes = bodies + static_cast<int>(pairs.size());
+    std::vector<std::vector<int>> adjacent(static_cast<std::size_t>(nodes));
+    int edges = 0, root = 0, toWorld = 0;
+    for (std::size_t j = 0; j < pairs.size(); ++j) {
+        const int node = bodies + static_cast<int>(j);
+        for (const int b : {pairs[j].first, pairs[j].second}) {
+            if (b < 0) {
+                root = node;
+                ++toWorld;
+                continue;
+            }
+            adjacent[static_cast<std::size_t>(node)].push_back(b);
+            adjacent[static_cast<std::size_t>(b)].push_back(node);
+            ++edges;
+        }
+    }
+    if (toWorld > 1 || edges != nodes - 1) return false;
+    std::vector<int> parent(static_cast<std::size_t>(nodes), -2), queue{root};
+    parent[static_cast<std::size_t>(root)] = -1;
+    for (std::size_t q = 0; q < queue.size(); ++q)
+        for (const int next : adjacent[static_cast<std::size_t>(queue[q])])
+            if (parent[static_cast<std::size_t>(next)] == -2) {
+                parent[static_cast<std::size_t>(next)] = queue[q];
+                queue.push_back(next);
+            }
+    if (static_cast<int>(queue.size()) != nodes) return false;
+    std::vector<int> dims(static_cast<std::size_t>(nodes), 6);
+    for (std::size_t j = 0; j < pairs.size(); ++j)
+        dims[static_cast<std::size_t>(bodies) + j] = static_cast<int>(nodeRows[j].size());
+    BlockTree& tree = group.tree;
+    if (!tree.reset(dims, parent)) return false;
+    // Bodies: M = diag(m, m, m, I_world).
+    for (int x = 0; x < bodies; ++x) {
+        const btRigidBody* rb = bodyPool[group.bodies[static_cast<std::size_t>(x)]].m_originalBody;
+        const btMatrix3x3& invInertia = rb->getInvInertiaTensorWorld();
+        Eigen::Matrix3d ii;
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) ii(r, c) = double(invInertia[r][c]);
+        if (!(ii.determinant() > 0)) return false;
+        const Eigen::Matrix3d inertia = ii.inverse();
+        double* m = tree.diag(x);
+        for (int q = 0; q < 3; ++q) m[7 * q] = 1.0 / double(rb->getInvMass());
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) m[6 * (3 + r) + 3 + c] = inertia(r, c);
+    }
+    // Joints: −(C + ε) on the diagonal, −J to the bodies.
+    group.rowAt.assign(group.rows.size(), 0);
+    for (std::size_t j = 0; j < pairs.size(); ++j) {
+        const int node = bodies + static_cast<int>(j);
+        const int k = dims[static_cast<std::size_t>(node)];
+        for (int slot = 0; slot < k; ++slot) {
+            const int i = nodeRows[j][static_cast<std::size_t>(slot)];
+            group.rowAt[static_cast<std::size_t>(i)] = tree.offset(node) + slot;
+            tree.diag(node)[slot * k + slot] = -(group.cfm(i) + epsilon);
+            const JointRow& row = group.rows[static_cast<std::size_t>(i)];
+            for (int s = 0; s < 2; ++s) {
+                const int b = s ? row.bodyB : row.bodyA;
+                if (b < 0) continue;
+                const SideJ& side = s ? row.b : row.a;
+                const bool up = parent[static_cast<std::size_t>(node)] == b; // joint → body edge, else body → joint
+                double* e = up ? tree.toParent(node) : tree.toParent(b);
+                for (int q = 0; q < 6; ++q) {
+                    const double v = -double(q < 3 ? side.lin[q] : side.ang[q - 3]);
+                    (up ? e[slot * 6 + q] : e[q * k + slot]) += v;
+                }
+            }
+        }
+    }
+    return tree.factor();
+}
 
 void RagdollSolver::setDirectJoints(bool on) { m_direct->enabled = on; }
 bool RagdollSolver::directJoints() const { return m_direct->enabled; }
@@ -170,28 +274,34 @@ bool RagdollSolver::buildDirect() {
         }
         group.rows.push_back(row);
     }
-    // A + C per group, factored.
+    // A + C per group, factored: along the figure's tree when it has one, densely otherwise.
     for (Direct::Group& group : d.groups) {
         const int n = static_cast<int>(group.rows.size());
-        Mat a = Mat::Zero(n, n);
-        for (const auto& at : group.rowsAt)
-            for (const auto& [r1, s1] : at)
-                for (const auto& [r2, s2] : at) {
-                    const Direct::JointRow& x = group.rows[static_cast<std::size_t>(r1)];
-                    const Direct::JointRow& y = group.rows[static_cast<std::size_t>(r2)];
-                    a(r1, r2) += dot(s1 ? x.b : x.a, s2 ? y.b : y.a);
-                }
         group.cfm.resize(n);
         double largest = 0;
-        for (int i = 0; i < n; ++i) largest = std::max(largest, a(i, i));
         for (int i = 0; i < n; ++i) {
-            const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
+            const Direct::JointRow& row = group.rows[static_cast<std::size_t>(i)];
+            const btSolverConstraint& c = pool[row.pool];
+            largest = std::max(largest,
+                               (row.bodyA >= 0 ? dot(row.a, row.a) : 0.0) + (row.bodyB >= 0 ? dot(row.b, row.b) : 0.0));
             group.cfm(i) = double(c.m_cfm) / double(c.m_jacDiagABInv);
-            // A joint loop makes A singular; a relative regularisation keeps the factor finite.
-            a(i, i) += group.cfm(i) + 1e-9 * largest;
             group.soft = group.soft || group.cfm(i) != 0;
         }
-        group.ldlt.compute(a);
+        // A joint loop makes A singular; a relative regularisation keeps the factor finite.
+        const double epsilon = 1e-9 * largest;
+        group.useTree = Direct::factorTree(group, m_tmpSolverBodyPool, epsilon);
+        if (!group.useTree) {
+            Mat a = Mat::Zero(n, n);
+            for (const auto& at : group.rowsAt)
+                for (const auto& [r1, s1] : at)
+                    for (const auto& [r2, s2] : at) {
+                        const Direct::JointRow& x = group.rows[static_cast<std::size_t>(r1)];
+                        const Direct::JointRow& y = group.rows[static_cast<std::size_t>(r2)];
+                        a(r1, r2) += dot(s1 ? x.b : x.a, s2 ? y.b : y.a);
+                    }
+            for (int i = 0; i < n; ++i) a(i, i) += group.cfm(i) + epsilon;
+            group.ldlt.compute(a);
+        }
         group.lambda.resize(n);
         for (int i = 0; i < n; ++i)
             group.lambda(i) = double(pool[group.rows[static_cast<std::size_t>(i)].pool].m_appliedImpulse);
@@ -250,66 +360,95 @@ bool RagdollSolver::buildDirect() {
             }
             fr.invEffectiveMass = w; // completed below
         }
+    std::vector<double> x;
     for (std::size_t g = 0; g < d.groups.size(); ++g) {
         Direct::Group& group = d.groups[g];
         const std::vector<Column>& cols = columns[g];
         if (cols.empty()) continue; // no other row touches the group (Eigen's solve of a 0-column matrix is UB)
         const Eigen::Index k = static_cast<Eigen::Index>(group.rows.size());
-        Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
-        for (std::size_t col = 0; col < cols.size(); ++col) {
-            const btSolverConstraint& c = *cols[col].row->c;
-            auto gather = [&](int x, const SideJ& rs) {
-                for (const auto& [i, si] : group.rowsAt[static_cast<std::size_t>(x)]) {
-                    const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
-                    gm(i, static_cast<Eigen::Index>(col)) += dot(si ? jr.b : jr.a, rs);
-                }
-            };
-            if (cols[col].withA)
-                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)],
-                       sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]));
-            if (cols[col].withB)
-                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)],
-                       sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]));
+        const std::size_t nb = group.bodies.size();
+        // The dense path's right-hand sides, J M⁻¹ Jᵣᵀ per column, solved in one batch.
+        Mat y;
+        if (!group.useTree) {
+            Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
+            for (std::size_t col = 0; col < cols.size(); ++col) {
+                const btSolverConstraint& c = *cols[col].row->c;
+                auto gather = [&](int xb, const SideJ& rs) {
+                    for (const auto& [i, si] : group.rowsAt[static_cast<std::size_t>(xb)]) {
+                        const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                        gm(i, static_cast<Eigen::Index>(col)) += dot(si ? jr.b : jr.a, rs);
+                    }
+                };
+                if (cols[col].withA)
+                    gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)],
+                           sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]));
+                if (cols[col].withB)
+                    gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)],
+                           sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]));
+            }
+            y = group.ldlt.solve(gm);
         }
-        const Mat y = group.ldlt.solve(gm);
         for (std::size_t col = 0; col < cols.size(); ++col) {
             Direct::FreeRow& fr = *cols[col].row;
             const btSolverConstraint& c = *fr.c;
             const int s = cols[col].side;
-            const Eigen::Index ci = static_cast<Eigen::Index>(col);
-            fr.reaction[s] = static_cast<int>(d.reactions.size());
-            d.reactions.insert(d.reactions.end(), y.col(ci).data(), y.col(ci).data() + k);
-            // u = M⁻¹Jᵣᵀ − M⁻¹Jᵀ y, per group body
-            const std::size_t off = d.responses.size();
-            fr.response[s] = static_cast<int>(off);
-            d.responses.resize(off + 6 * group.bodies.size(), 0.0);
-            double* u = d.responses.data() + off;
-            auto add = [&](int x, const btVector3& lin, const btVector3& ang, double f) {
-                for (int q = 0; q < 3; ++q) {
-                    u[6 * x + q] += f * double(lin[q]);
-                    u[6 * x + 3 + q] += f * double(ang[q]);
-                }
-            };
             const int xa = cols[col].withA ? d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)] : -1;
             const int xb = cols[col].withB ? d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)] : -1;
             const SideJ sa = sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]);
             const SideJ sb = sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]);
-            if (xa >= 0) add(xa, sa.linInv, sa.angInv, 1);
-            if (xb >= 0) add(xb, sb.linInv, sb.angInv, 1);
-            for (Eigen::Index i = 0; i < k; ++i) {
-                const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
-                const double yi = y(i, ci);
-                if (jr.bodyA >= 0) add(jr.bodyA, jr.a.linInv, jr.a.angInv, -yi);
-                if (jr.bodyB >= 0) add(jr.bodyB, jr.b.linInv, jr.b.angInv, -yi);
+            fr.reaction[s] = static_cast<int>(d.reactions.size());
+            d.reactions.resize(d.reactions.size() + static_cast<std::size_t>(k));
+            double* reaction = d.reactions.data() + fr.reaction[s];
+            // u = M⁻¹Jᵣᵀ − M⁻¹Jᵀ y, per group body
+            d.response.assign(6 * nb, 0.0);
+            double* u = d.response.data();
+            if (group.useTree) {
+                // H [u; λ] = [Jᵣᵀ; 0]: u is the response, λ = −y the joints' reaction.
+                x.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
+                auto put = [&](int xb2, const SideJ& rs) {
+                    for (int q = 0; q < 3; ++q) {
+                        x[static_cast<std::size_t>(6 * xb2 + q)] += double(rs.lin[q]);
+                        x[static_cast<std::size_t>(6 * xb2 + 3 + q)] += double(rs.ang[q]);
+                    }
+                };
+                if (xa >= 0) put(xa, sa);
+                if (xb >= 0) put(xb, sb);
+                group.tree.solve(x.data());
+                std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(6 * nb), u);
+                for (Eigen::Index i = 0; i < k; ++i)
+                    reaction[i] = -x[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
+            } else {
+                const Eigen::Index ci = static_cast<Eigen::Index>(col);
+                for (Eigen::Index i = 0; i < k; ++i) reaction[i] = y(i, ci);
+                auto add = [&](int xb2, const btVector3& lin, const btVector3& ang, double f) {
+                    for (int q = 0; q < 3; ++q) {
+                        u[6 * xb2 + q] += f * double(lin[q]);
+                        u[6 * xb2 + 3 + q] += f * double(ang[q]);
+                    }
+                };
+                if (xa >= 0) add(xa, sa.linInv, sa.angInv, 1);
+                if (xb >= 0) add(xb, sb.linInv, sb.angInv, 1);
+                for (Eigen::Index i = 0; i < k; ++i) {
+                    const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                    if (jr.bodyA >= 0) add(jr.bodyA, jr.a.linInv, jr.a.angInv, -reaction[i]);
+                    if (jr.bodyB >= 0) add(jr.bodyB, jr.b.linInv, jr.b.angInv, -reaction[i]);
+                }
             }
-            auto jdotu = [&](int x, const SideJ& rs) {
+            auto jdotu = [&](int xb2, const SideJ& rs) {
                 double v = 0;
                 for (int q = 0; q < 3; ++q)
-                    v += double(rs.lin[q]) * u[6 * x + q] + double(rs.ang[q]) * u[6 * x + 3 + q];
+                    v += double(rs.lin[q]) * u[6 * xb2 + q] + double(rs.ang[q]) * u[6 * xb2 + 3 + q];
                 return v;
             };
             if (xa >= 0) fr.invEffectiveMass += jdotu(xa, sa);
             if (xb >= 0) fr.invEffectiveMass += jdotu(xb, sb);
+            // Stored in Bullet's precision and layout: the iterations apply it as Bullet applies its own.
+            fr.response[s] = static_cast<int>(d.responses.size());
+            for (std::size_t xb2 = 0; xb2 < nb; ++xb2) {
+                const double* ux = u + 6 * xb2;
+                d.responses.emplace_back(btScalar(ux[0]), btScalar(ux[1]), btScalar(ux[2]));
+                d.responses.emplace_back(btScalar(ux[3]), btScalar(ux[4]), btScalar(ux[5]));
+            }
         }
     }
     for (auto* list : {&d.nonContact, &d.contact, &d.friction})
@@ -342,6 +481,23 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
             const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
             e(i) = double(c.m_rhs) / double(c.m_jacDiagABInv) - group.cfm(i) * group.lambda(i) - relVel(c);
             residual = std::max(residual, e(i) * e(i));
+        }
+        if (group.useTree) {
+            // H [Δv; Δλ] = [0; −e]: the bodies' velocity changes come out with the impulses.
+            d.scratch.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
+            for (Eigen::Index i = 0; i < n; ++i)
+                d.scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])] = -e(i);
+            group.tree.solve(d.scratch.data());
+            if (!std::all_of(d.scratch.begin(), d.scratch.end(), [](double v) { return std::isfinite(v); })) continue;
+            for (Eigen::Index i = 0; i < n; ++i)
+                group.lambda(i) += d.scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
+            for (std::size_t xb = 0; xb < group.bodies.size(); ++xb) {
+                btSolverBody& b = m_tmpSolverBodyPool[group.bodies[xb]];
+                const double* dv = d.scratch.data() + 6 * xb;
+                b.m_deltaLinearVelocity += btVector3(btScalar(dv[0]), btScalar(dv[1]), btScalar(dv[2]));
+                b.m_deltaAngularVelocity += btVector3(btScalar(dv[3]), btScalar(dv[4]), btScalar(dv[5]));
+            }
+            continue;
         }
         const Vec dl = group.ldlt.solve(e);
         if (!dl.allFinite()) continue;
@@ -390,12 +546,12 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
             }
             if (fr.response[s] < 0) continue; // covered by side A's response
             Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
-            const double* u = d.responses.data() + fr.response[s];
+            const btVector3* u = d.responses.data() + fr.response[s];
+            const btScalar impulse = btScalar(dl);
             for (std::size_t x = 0; x < group.bodies.size(); ++x) {
                 btSolverBody& b = m_tmpSolverBodyPool[group.bodies[x]];
-                const double* ux = u + 6 * x;
-                b.m_deltaLinearVelocity += btVector3(btScalar(ux[0] * dl), btScalar(ux[1] * dl), btScalar(ux[2] * dl));
-                b.m_deltaAngularVelocity += btVector3(btScalar(ux[3] * dl), btScalar(ux[4] * dl), btScalar(ux[5] * dl));
+                b.m_deltaLinearVelocity += u[2 * x] * impulse;
+                b.m_deltaAngularVelocity += u[2 * x + 1] * impulse;
             }
             if (group.soft) {
                 const double* y = d.reactions.data() + fr.reaction[s];
@@ -464,12 +620,12 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
                 }
                 if (fr.response[s] < 0) continue;
                 const Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
-                const double* u = d.responses.data() + fr.response[s];
+                const btVector3* u = d.responses.data() + fr.response[s];
+                const btScalar impulse = btScalar(dl);
                 for (std::size_t x = 0; x < group.bodies.size(); ++x) {
                     btSolverBody& body = m_tmpSolverBodyPool[group.bodies[x]];
-                    const double* ux = u + 6 * x;
-                    body.m_pushVelocity += btVector3(btScalar(ux[0] * dl), btScalar(ux[1] * dl), btScalar(ux[2] * dl));
-                    body.m_turnVelocity += btVector3(btScalar(ux[3] * dl), btScalar(ux[4] * dl), btScalar(ux[5] * dl));
+                    body.m_pushVelocity += u[2 * x] * impulse;
+                    body.m_turnVelocity += u[2 * x + 1] * impulse;
                 }
             }
         }

@@ -1,0 +1,46 @@
+// A block LDLᵀ factorisation of a symmetric matrix whose block graph is a tree (or a forest): Baraff's linear-time
+// elimination ("Linear-time dynamics using Lagrange multipliers", SIGGRAPH 1996). Internal to the bullet layer:
+// the direct joint solve (RagdollSolver) builds one per ragdoll from its bodies and joints.
+#pragma once
+
+#include <span>
+#include <vector>
+
+namespace afb::bullet {
+
+/// H x = b for a symmetric H made of square diagonal blocks H_ii (node i of dimension d_i) and one off-diagonal
+/// block H_{i,p(i)} (d_i × d_{p(i)}, and its transpose) per tree edge, factored once and solved in O(Σ d_i²)
+/// without fill-in. Every pivot D_i = H_ii − Σ_children H_{c,i}ᵀ D_c⁻¹ H_{c,i} must be invertible; the bodies and
+/// joints of a ragdoll give positive-definite body pivots and negative-definite joint pivots when the tree is
+/// rooted at a body or at the one joint that holds the figure to the world.
+class BlockTree {
+  public:
+    /// Lays out nodes of the given dimensions and parents (−1: a root); blocks are zeroed. False (and unusable)
+    /// when `parent` has a cycle or an out-of-range index.
+    bool reset(std::span<const int> dims, std::span<const int> parent);
+
+    int nodes() const { return static_cast<int>(m_dim.size()); }
+    int dim(int i) const { return m_dim[static_cast<std::size_t>(i)]; }
+    int parent(int i) const { return m_parent[static_cast<std::size_t>(i)]; }
+    /// Offset of node i's entries in the vectors solve() takes, and their total size.
+    int offset(int i) const { return m_offset[static_cast<std::size_t>(i)]; }
+    int size() const { return m_size; }
+
+    /// H_ii, row-major d_i × d_i; H_{i,p(i)}, row-major d_i × d_p. Filled by the caller before factor().
+    double* diag(int i) { return m_blocks.data() + m_diagAt[static_cast<std::size_t>(i)]; }
+    double* toParent(int i) { return m_blocks.data() + m_edgeAt[static_cast<std::size_t>(i)]; }
+
+    /// Factors in place (the diagonal blocks become the pivots' inverses). False when a pivot is singular or not
+    /// finite (every pivot must be definite, of either sign: no pivoting is done).
+    bool factor();
+    /// Solves H x = b in place (x holds b on entry, laid out by offset()).
+    void solve(double* x) const;
+
+  private:
+    std::vector<int> m_dim, m_parent, m_offset, m_order; // m_order: every node after its children
+    std::vector<std::size_t> m_diagAt, m_edgeAt, m_gainAt;
+    std::vector<double> m_blocks, m_gain; // m_gain: D_i⁻¹ H_{i,p(i)} per edge, after factor()
+    int m_size = 0;
+};
+
+} // namespace afb::bullet
