@@ -1,0 +1,163 @@
+// BlockTree (src/bullet/BlockTree.h), the block LDLᵀ behind the direct joint solve, against a dense solve of the
+// same matrix by Eigen: random trees (fixed seed) whose blocks have a ragdoll's signs (positive-definite body
+// blocks, negative-definite joint blocks, a body–joint coupling per edge), node sizes from 1 to 9 so that both the
+// fixed-size kernels (≤ 6) and the general path run, sparse right-hand sides (the zero-skip in the forward pass),
+// and the inputs it must refuse.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Dense>
+#include <random>
+#include <vector>
+
+#include "bullet/BlockTree.h"
+
+using afb::bullet::BlockTree;
+
+namespace {
+
+// A random symmetric definite d × d block: A Aᵀ + d·I, negated when `negative`.
+Eigen::MatrixXd definite(int d, bool negative, std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::MatrixXd a(d, d);
+    for (int r = 0; r < d; ++r)
+        for (int c = 0; c < d; ++c) a(r, c) = u(rng);
+    Eigen::MatrixXd m = a * a.transpose() + d * Eigen::MatrixXd::Identity(d, d);
+    return negative ? Eigen::MatrixXd(-m) : m;
+}
+
+struct Case {
+    std::vector<int> dims, parent;
+    Eigen::MatrixXd dense;
+};
+
+// Nodes alternate body (positive) and joint (negative) by depth, as in a ragdoll rooted at a body.
+Case randomTree(int nodes, std::mt19937& rng) {
+    Case c;
+    std::uniform_int_distribution<int> size(1, 9);
+    std::vector<int> depth;
+    for (int i = 0; i < nodes; ++i) {
+        c.dims.push_back(size(rng));
+        const int p = i == 0 ? -1 : std::uniform_int_distribution<int>(0, i - 1)(rng);
+        c.parent.push_back(p);
+        depth.push_back(p < 0 ? 0 : depth[static_cast<std::size_t>(p)] + 1);
+    }
+    std::vector<int> offset;
+    int n = 0;
+    for (int d : c.dims) {
+        offset.push_back(n);
+        n += d;
+    }
+    c.dense = Eigen::MatrixXd::Zero(n, n);
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    for (int i = 0; i < nodes; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        c.dense.block(offset[k], offset[k], c.dims[k], c.dims[k]) = definite(c.dims[k], depth[k] % 2 == 1, rng);
+        const int p = c.parent[k];
+        if (p < 0) continue;
+        const auto q = static_cast<std::size_t>(p);
+        Eigen::MatrixXd e(c.dims[k], c.dims[q]);
+        for (int r = 0; r < e.rows(); ++r)
+            for (int col = 0; col < e.cols(); ++col) e(r, col) = u(rng);
+        c.dense.block(offset[k], offset[q], c.dims[k], c.dims[q]) = e;
+        c.dense.block(offset[q], offset[k], c.dims[q], c.dims[k]) = e.transpose();
+    }
+    return c;
+}
+
+bool load(BlockTree& tree, const Case& c) {
+    if (!tree.reset(c.dims, c.parent)) return false;
+    for (int i = 0; i < tree.nodes(); ++i) {
+        const int d = tree.dim(i);
+        double* diag = tree.diag(i);
+        for (int r = 0; r < d; ++r)
+            for (int col = 0; col < d; ++col) diag[r * d + col] = c.dense(tree.offset(i) + r, tree.offset(i) + col);
+        const int p = tree.parent(i);
+        if (p < 0) continue;
+        const int dp = tree.dim(p);
+        double* edge = tree.toParent(i);
+        for (int r = 0; r < d; ++r)
+            for (int col = 0; col < dp; ++col) edge[r * dp + col] = c.dense(tree.offset(i) + r, tree.offset(p) + col);
+    }
+    return true;
+}
+
+} // namespace
+
+TEST_CASE("block tree: solves match a dense solve on random ragdoll-signed trees", "[bullet][blocktree]") {
+    std::mt19937 rng(20261123);
+    for (int trial = 0; trial < 40; ++trial) {
+        const int nodes = 1 + trial % 25;
+        const Case c = randomTree(nodes, rng);
+        BlockTree tree;
+        REQUIRE(load(tree, c));
+        REQUIRE(tree.size() == c.dense.rows());
+        REQUIRE(tree.factor());
+        const Eigen::PartialPivLU<Eigen::MatrixXd> lu(c.dense);
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        for (int rhs = 0; rhs < 3; ++rhs) {
+            // rhs 0: dense; 1: one node's entries only; 2: one entry.
+            Eigen::VectorXd b = Eigen::VectorXd::Zero(c.dense.rows());
+            const int node = std::uniform_int_distribution<int>(0, nodes - 1)(rng);
+            for (int k = 0; k < b.size(); ++k) {
+                const bool inNode = k >= tree.offset(node) && k < tree.offset(node) + tree.dim(node);
+                if (rhs == 0 || (rhs == 1 && inNode) || (rhs == 2 && k == tree.offset(node))) b[k] = u(rng);
+            }
+            Eigen::VectorXd x = b;
+            tree.solve(x.data());
+            const Eigen::VectorXd expected = lu.solve(b);
+            INFO("trial " << trial << ", " << nodes << " nodes, size " << b.size() << ", rhs " << rhs);
+            CHECK((c.dense * x - b).norm() <= 1e-10 * (1.0 + b.norm()));
+            CHECK((x - expected).norm() <= 1e-9 * (1.0 + expected.norm()));
+        }
+    }
+}
+
+TEST_CASE("block tree: a forest solves each tree on its own", "[bullet][blocktree]") {
+    std::mt19937 rng(7);
+    Case a = randomTree(6, rng), b = randomTree(4, rng);
+    Case c;
+    c.dims = a.dims;
+    c.parent = a.parent;
+    for (std::size_t i = 0; i < b.dims.size(); ++i) {
+        c.dims.push_back(b.dims[i]);
+        c.parent.push_back(b.parent[i] < 0 ? -1 : b.parent[i] + static_cast<int>(a.dims.size()));
+    }
+    const auto na = a.dense.rows(), nb = b.dense.rows();
+    c.dense = Eigen::MatrixXd::Zero(na + nb, na + nb);
+    c.dense.topLeftCorner(na, na) = a.dense;
+    c.dense.bottomRightCorner(nb, nb) = b.dense;
+    BlockTree tree;
+    REQUIRE(load(tree, c));
+    REQUIRE(tree.factor());
+    Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(na + nb, -1.0, 1.0);
+    Eigen::VectorXd x = rhs;
+    tree.solve(x.data());
+    CHECK((c.dense * x - rhs).norm() <= 1e-10);
+}
+
+TEST_CASE("block tree: refuses cycles, bad sizes and singular pivots", "[bullet][blocktree]") {
+    BlockTree tree;
+    const std::vector<int> three{3, 3, 3};
+    CHECK_FALSE(tree.reset(three, std::vector<int>{1, 2, 0}));  // a cycle, no root
+    CHECK_FALSE(tree.factor());
+    CHECK_FALSE(tree.reset(three, std::vector<int>{-1, 0, 2})); // its own parent
+    CHECK_FALSE(tree.reset(three, std::vector<int>{-1, 0, 5})); // out of range
+    CHECK_FALSE(tree.reset(three, std::vector<int>{-1, 0}));    // sizes disagree
+    CHECK_FALSE(tree.reset(std::vector<int>{3, 0}, std::vector<int>{-1, 0}));
+    CHECK_FALSE(tree.reset(std::vector<int>{3, 25}, std::vector<int>{-1, 0}));
+
+    // A zero pivot: the child's block is singular.
+    REQUIRE(tree.reset(std::vector<int>{2, 2}, std::vector<int>{-1, 0}));
+    double* d0 = tree.diag(0);
+    d0[0] = d0[3] = 1.0;
+    double* d1 = tree.diag(1);
+    d1[0] = 1.0; // d1[3] stays 0: rank 1
+    CHECK_FALSE(tree.factor());
+
+    // A Schur complement that vanishes: H = [1 1; 1 1] as two 1 × 1 nodes.
+    REQUIRE(tree.reset(std::vector<int>{1, 1}, std::vector<int>{-1, 0}));
+    tree.diag(0)[0] = 1.0;
+    tree.diag(1)[0] = 1.0;
+    tree.toParent(1)[0] = 1.0;
+    CHECK_FALSE(tree.factor());
+}
