@@ -5,9 +5,10 @@
 // and the inputs it must refuse.
 #include <catch2/catch.hpp>
 
-#include <Eigen/Dense>
 #include <random>
 #include <vector>
+
+#include <Eigen/Dense>
 
 #include "bullet/BlockTree.h"
 
@@ -138,7 +139,7 @@ TEST_CASE("block tree: a forest solves each tree on its own", "[bullet][blocktre
 TEST_CASE("block tree: refuses cycles, bad sizes and singular pivots", "[bullet][blocktree]") {
     BlockTree tree;
     const std::vector<int> three{3, 3, 3};
-    CHECK_FALSE(tree.reset(three, std::vector<int>{1, 2, 0}));  // a cycle, no root
+    CHECK_FALSE(tree.reset(three, std::vector<int>{1, 2, 0})); // a cycle, no root
     CHECK_FALSE(tree.factor());
     CHECK_FALSE(tree.reset(three, std::vector<int>{-1, 0, 2})); // its own parent
     CHECK_FALSE(tree.reset(three, std::vector<int>{-1, 0, 5})); // out of range
