@@ -55,9 +55,12 @@ class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
         // distance now and at the end of the step at the body's current velocity (a box tipping over an edge
         // needs the corners it is turning onto, not the nearer ones behind it).
         const btTransform& world = polytopeWrap->getWorldTransform();
-        const btRigidBody* body = btRigidBody::upcast(polytopeWrap->getCollisionObject());
-        const btVector3 v = body ? body->getLinearVelocity() : btVector3(0, 0, 0);
-        const btVector3 w = body ? body->getAngularVelocity() : btVector3(0, 0, 0);
+        // A multibody link's velocity is on its collider (MultibodyRagdoll::publishVelocities; zero for objects
+        // that never set it).
+        const btCollisionObject* object = polytopeWrap->getCollisionObject();
+        const btRigidBody* body = btRigidBody::upcast(object);
+        const btVector3 v = body ? body->getLinearVelocity() : object->getInterpolationLinearVelocity();
+        const btVector3 w = body ? body->getAngularVelocity() : object->getInterpolationAngularVelocity();
         const btVector3 centre = world.getOrigin();
         const btScalar dt = info.m_timeStep;
         auto inManifold = [&](int vertex) {

@@ -116,13 +116,12 @@ std::optional<Method> methodPreset(std::string_view name) {
     }
     if (name == "multibody") {
         // Reduced coordinates: no joint rows to iterate, warm-start or project; contacts as the rigid default's
-        // (20 iterations, vertex contacts), limits our own speculative rows, then 4 position sweeps over the limits
-        // (README: the multibody backend). Speculative contacts and continuous collision are the rigid backend's
-        // (Bullet's multibody world has neither).
+        // (20 iterations, vertex contacts, speculative, warm-started), limits our own speculative rows, then 4
+        // position sweeps over the limits and contacts (README: the multibody backend). Continuous collision is
+        // the rigid backend's (Bullet's multibody world has none).
         m.backend = Backend::Multibody;
         m.jointIterations = 0;
         m.positionIterations = 4;
-        m.speculativeContacts = false;
         m.jointWarmStarting = false;
         m.ccd = CcdPolicy::Off;
         return m;

@@ -105,9 +105,23 @@ class MultibodyRagdoll {
     void addConstraints(const Method& method);
     void refreshTransforms(btMultiBody& body);
     void dampVelocities(btScalar dt);
-    /// Method::positionIterations sweeps of every limit and twist row on positions (velocities untouched), after
-    /// each substep: what the velocity rows left past a limit is closed before the step ends.
-    void correctLimitPositions();
+    /// A contact of the ragdoll's bodies for the position sweeps: the figure bodies on each side (−1: not ours).
+    struct SweepContact {
+        btPersistentManifold* manifold;
+        int bodyA, bodyB;
+    };
+    /// Method::positionIterations sweeps on positions (velocities untouched) after each substep: every limit and
+    /// twist row, then every contact of the ragdoll's bodies, so what the velocity rows left past a limit is
+    /// closed before the step ends without pushing a limb into the ground.
+    void correctPositions();
+    /// Moves the contact's tree(s) by M⁻¹Jᵀ to close part of its depth past the slop; false if nothing to do.
+    bool correctContact(const SweepContact& c, const btManifoldPoint& cp, btAlignedObjectArray<btScalar>& r,
+                        btAlignedObjectArray<btVector3>& v, btAlignedObjectArray<btMatrix3x3>& m,
+                        btAlignedObjectArray<btQuaternion>& q, btAlignedObjectArray<btVector3>& o);
+    /// Every body's velocity on its collider (btCollisionObject's interpolation velocities, which Bullet leaves
+    /// unused for a link collider), where the collision algorithms and the speculative reach read a body's motion
+    /// (as a btRigidBody's velocity for the rigid backend).
+    void publishVelocities(std::span<const BodySample> samples);
     /// The trees' motion now as the energy guards' reference (after each step and any outside velocity change).
     void recordMotion();
 
@@ -125,7 +139,9 @@ class MultibodyRagdoll {
     std::vector<bool> m_treeEdge;                 ///< per figure constraint: a tree joint (a link), not a loop
     std::vector<btMultiBodyConstraint*> m_guards; ///< per part, its energy guard (owned by m_constraints)
     std::vector<btMultiBodyConstraint*> m_limits; ///< limit and twist rows (owned by m_constraints)
-    int m_positionIterations = 0;                 ///< sweeps of correctLimitPositions
+    int m_positionIterations = 0;                 ///< sweeps of correctPositions
+    std::vector<SweepContact> m_sweepContacts;    ///< this substep's, for correctPositions
+    std::vector<btScalar> m_sweepJac, m_sweepJacB, m_sweepMove;
     std::unique_ptr<Action> m_action;
 };
 

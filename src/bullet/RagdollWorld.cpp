@@ -12,6 +12,7 @@
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
 #include "afb/bullet/Constraints.h"
+#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 
@@ -97,8 +98,11 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     info.m_erp2 = static_cast<btScalar>(m.contactErp);
     info.m_erp = static_cast<btScalar>(m.jointErp);
     info.m_warmstartingFactor = static_cast<btScalar>(m.warmStartingFactor);
-    if (m.warmStarting) info.m_solverMode |= SOLVER_USE_WARMSTARTING;
-    else info.m_solverMode &= ~SOLVER_USE_WARMSTARTING;
+    info.m_articulatedWarmstartingFactor = static_cast<btScalar>(m.warmStartingFactor);
+    // Bullet's multibody solver warm-starts its rows only under its own flag (and starts every multibody contact
+    // from zero otherwise: a figure standing on its feet then sinks while 20 iterations rebuild its weight).
+    if (m.warmStarting) info.m_solverMode |= SOLVER_USE_WARMSTARTING | SOLVER_USE_ARTICULATED_WARMSTARTING;
+    else info.m_solverMode &= ~(SOLVER_USE_WARMSTARTING | SOLVER_USE_ARTICULATED_WARMSTARTING);
     if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver()))
         solver->setDirectJoints(m.directJoints);
     // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.
@@ -123,7 +127,25 @@ class RagdollWorld::PositionAction : public btActionInterface {
         wakeTouched(world);
         const int iterations = m_owner.m_method.positionIterations;
         if (iterations > 0) positionPass(world, iterations);
-        if (m_owner.m_method.speculativeContacts) widenContacts(world, dt);
+        if (m_owner.m_method.speculativeContacts) {
+            publishMultibodyVelocities();
+            widenContacts(world, dt);
+        }
+    }
+
+    // A multibody ragdoll publishes its bodies' velocities on their colliders after its own substep work, which
+    // Bullet runs after this action (actions run in the order added): published here too, so the reach is this
+    // substep's.
+    void publishMultibodyVelocities() {
+        for (Ragdoll* r : m_owner.m_ragdolls) {
+            if (r->backend() != Backend::Multibody || r->atRest()) continue;
+            const std::vector<figure::BodyState> states = r->bodyStates();
+            for (int i = 0; i < r->bodyCount(); ++i) {
+                btCollisionObject& o = r->collisionObject(i);
+                o.setInterpolationLinearVelocity(toBt(states[static_cast<std::size_t>(i)].linearVelocity));
+                o.setInterpolationAngularVelocity(toBt(states[static_cast<std::size_t>(i)].angularVelocity));
+            }
+        }
     }
 
     // A frozen ragdoll (Ragdoll::frozen) wakes when an active object moving faster than the figure's rest speed
@@ -158,28 +180,62 @@ class RagdollWorld::PositionAction : public btActionInterface {
                 m_owner.m_ragdolls[static_cast<std::size_t>(r)]->wake();
     }
 
+    // How a body moves, for the speculative reach: a ragdoll body's velocity (a multibody link's is on its
+    // collider, refreshed in updateAction before widenContacts), its speed plus its angular speed times its
+    // bounding radius (how fast any point of its surface can move), and its angular part alone.
+    struct Motion {
+        bool ragdoll = false, link = false;
+        btVector3 velocity{0, 0, 0};
+        btScalar speed = 0, spin = 0;
+    };
     // Speculative contacts for the next substep: every manifold of a ragdoll body keeps (and finds) points up
     // to the distance its bodies can close in one substep at their current speeds, plus Bullet's own threshold.
     void widenContacts(btCollisionWorld* world, btScalar dt) {
+        m_gravityDt = m_owner.m_world.getGravity().length() * dt;
         btDispatcher* dispatcher = world->getDispatcher();
         btPersistentManifold** manifolds = dispatcher->getInternalManifoldPointer();
         for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
             btPersistentManifold* m = manifolds[i];
-            const btScalar reach = reachOf(m->getBody0(), dt) + reachOf(m->getBody1(), dt);
+            const Motion a = motionOf(m->getBody0()), b = motionOf(m->getBody1());
+            if (!a.ragdoll && !b.ragdoll) continue;
+            const btScalar reach = kReachAllowance * (a.speed + b.speed) * dt;
             if (reach <= 0) continue;
-            m->setContactBreakingThreshold(btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reach));
+            const btScalar threshold = btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reach);
+            m->setContactBreakingThreshold(threshold);
+            if (a.link || b.link) m->setContactProcessingThreshold(processingThreshold(*m, a, b, threshold, dt));
         }
     }
-    // How far a ragdoll body's surface can move in `dt` (0 for other objects): linear speed plus angular speed
-    // times the shape's bounding radius, with a 25 % allowance for the acceleration within the step.
-    btScalar reachOf(const btCollisionObject* o, btScalar dt) const {
-        const BodyOwner* owned = find(o);
-        const btRigidBody* b = btRigidBody::upcast(o);
-        if (owned == nullptr || b == nullptr) return 0;
-        const btScalar speed =
-            b->getLinearVelocity().length() + b->getAngularVelocity().length() * owned->boundingRadius;
-        return btScalar(1.25) * speed * dt;
+    // Each row of a multibody contact costs passes over the whole tree, so the solver gets a point above the
+    // surface only when its bodies can close that distance in this substep: along the contact normals at their
+    // velocities, plus what their spin and gravity can add (a body resting or sliding on the ground keeps its far
+    // points in the manifold for later steps, but they cost nothing now). Measured on the humanoid: the same
+    // penetration as solving every point within the speculative reach, for 20 % fewer instructions per step (and
+    // as many as Bullet's own 2 cm threshold without speculative contacts). Rigid bodies' contacts are all solved
+    // (a row is cheap there).
+    btScalar processingThreshold(const btPersistentManifold& m, const Motion& a, const Motion& b, btScalar breaking,
+                                 btScalar dt) {
+        if (m.getNumContacts() == 0) return breaking; // points found next time: as far as they could come
+        btScalar approach = 0;                        // m/s, along the normals (B towards A)
+        for (int k = 0; k < m.getNumContacts(); ++k)
+            approach = btMax(approach, -(a.velocity - b.velocity).dot(m.getContactPoint(k).m_normalWorldOnB));
+        approach += a.spin + b.spin + m_gravityDt;
+        return btMin(breaking, kReachAllowance * approach * dt);
     }
+    Motion motionOf(const btCollisionObject* o) const {
+        Motion out;
+        const BodyOwner* owned = find(o);
+        if (owned == nullptr) return out;
+        const btRigidBody* b = btRigidBody::upcast(o);
+        out.ragdoll = true;
+        out.link = b == nullptr;
+        out.velocity = b ? b->getLinearVelocity() : o->getInterpolationLinearVelocity();
+        const btVector3& w = b ? b->getAngularVelocity() : o->getInterpolationAngularVelocity();
+        out.spin = w.length() * owned->boundingRadius;
+        out.speed = out.velocity.length() + out.spin;
+        return out;
+    }
+    // A 25 % allowance for the acceleration within the step.
+    static constexpr btScalar kReachAllowance = btScalar(1.25);
 
     void positionPass(btCollisionWorld* world, int iterations) {
         // Contacts per ragdoll, in the dispatcher's order: one pass over the manifolds for all ragdolls.
@@ -217,6 +273,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
     }
 
     RagdollWorld& m_owner;
+    btScalar m_gravityDt = 0; ///< the speed gravity adds in a substep, m/s
     std::vector<std::vector<btPersistentManifold*>> m_contacts;
     std::vector<int> m_toWake;
 };

@@ -16,9 +16,10 @@ enum class Backend {
     Rigid, ///< one btRigidBody per body, joined by btTypedConstraints (maximal coordinates)
     /// one btMultiBody per connected part of the figure (reduced coordinates, Featherstone): its joints cannot
     /// separate. Needs a btMultiBodyDynamicsWorld. Knobs that apply: substeps, iterations, solver-tolerance,
-    /// joint-erp (contacts, loop joints and universal joints' twist), limit-erp, speculative-limits,
-    /// position-iterations (limits only), warm-starting (contacts) and multipoint-contacts; the rest are the rigid
-    /// backend's and are ignored.
+    /// contact-erp, joint-erp (loop joints and universal joints' twist), limit-erp, speculative-limits,
+    /// position-iterations (limits and contacts), warm-starting (contacts, limits and loop joints),
+    /// warm-starting-factor, multipoint-contacts and speculative-contacts; the rest are the rigid backend's and
+    /// are ignored.
     Multibody,
 };
 
@@ -61,7 +62,8 @@ struct Method {
     /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
     /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world. A multibody ragdoll
-    /// (Backend::Multibody) runs its own sweeps over its limits, in any world, from its SpawnOptions::method.
+    /// (Backend::Multibody) runs its own sweeps over its limits and contacts, in any world, from its
+    /// SpawnOptions::method.
     int positionIterations = 4;
     /// Full contact manifolds on planes: hulls and boxes against a static plane take their contact points from
     /// the (up to four) vertices that come nearest the plane within the step, kept from step to step by vertex
