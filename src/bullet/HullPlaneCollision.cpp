@@ -58,7 +58,8 @@ class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
         const btRigidBody* body = btRigidBody::upcast(polytopeWrap->getCollisionObject());
         const btVector3 v = body ? body->getLinearVelocity() : btVector3(0, 0, 0);
         const btVector3 w = body ? body->getAngularVelocity() : btVector3(0, 0, 0);
-        const btVector3 centre = world.getOrigin();
+        // The body turns about its own centre of mass (a merged body's: the child's frame is not the body's).
+        const btVector3 centre = polytopeWrap->getCollisionObject()->getWorldTransform().getOrigin();
         const btScalar dt = info.m_timeStep;
         auto inManifold = [&](int vertex) {
             for (int k = 0; k < m_manifold->getNumContacts(); ++k)
