@@ -61,7 +61,8 @@ class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
         const btRigidBody* body = btRigidBody::upcast(object);
         const btVector3 v = body ? body->getLinearVelocity() : object->getInterpolationLinearVelocity();
         const btVector3 w = body ? body->getAngularVelocity() : object->getInterpolationAngularVelocity();
-        const btVector3 centre = world.getOrigin();
+        // The body turns about its own centre of mass (a merged body's: the child's frame is not the body's).
+        const btVector3 centre = object->getWorldTransform().getOrigin();
         const btScalar dt = info.m_timeStep;
         auto inManifold = [&](int vertex) {
             for (int k = 0; k < m_manifold->getNumContacts(); ++k)

@@ -8,6 +8,7 @@
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
 
+#include "CompoundCollision.h"
 #include "EngineFriction.h"
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
@@ -223,7 +224,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
     }
     Motion motionOf(const btCollisionObject* o) const {
         Motion out;
-        const BodyOwner* owned = find(o);
+        const BodyOwner* owned = m_owner.ownerOf(o);
         if (owned == nullptr) return out;
         const btRigidBody* b = btRigidBody::upcast(o);
         out.ragdoll = true;
@@ -260,15 +261,8 @@ class RagdollWorld::PositionAction : public btActionInterface {
     void debugDraw(btIDebugDraw*) override {}
 
   private:
-    const BodyOwner* find(const btCollisionObject* o) const {
-        const auto& v = m_owner.m_owners;
-        const auto it = std::lower_bound(v.begin(), v.end(), o, [](const BodyOwner& e, const btCollisionObject* key) {
-            return std::less<const btCollisionObject*>()(e.body, key);
-        });
-        return it != v.end() && it->body == o ? &*it : nullptr;
-    }
     int owner(const btCollisionObject* o) const {
-        const BodyOwner* owned = find(o);
+        const BodyOwner* owned = m_owner.ownerOf(o);
         return owned ? owned->ragdoll : -1;
     }
 
@@ -278,13 +272,96 @@ class RagdollWorld::PositionAction : public btActionInterface {
     std::vector<int> m_toWake;
 };
 
+// The world's answers to the merged-body algorithm (detail::CompoundCollision): which compounds are merged ragdoll
+// bodies, which of their children may touch what, and how far their contacts reach.
+class RagdollWorld::MergedBodies : public detail::CompoundRules {
+  public:
+    MergedBodies(RagdollWorld& owner, btCollisionDispatcher& dispatcher)
+        : m_owner(owner), m_collision(dispatcher, *dispatcher.getCollisionConfiguration(), *this) {}
+
+    bool handles(const btCollisionObject& compound) const override {
+        const BodyOwner* owned = m_owner.ownerOf(&compound);
+        return owned != nullptr &&
+               m_owner.m_ragdolls[static_cast<std::size_t>(owned->ragdoll)]->backend() == Backend::Rigid;
+    }
+
+    bool mayTouch(const btCollisionObject& compound, int child, const btCollisionObject& other,
+                  int otherChild) const override {
+        const BodyOwner* a = m_owner.ownerOf(&compound);
+        const BodyOwner* b = m_owner.ownerOf(&other);
+        if (a == nullptr || b == nullptr || a->ragdoll != b->ragdoll) return true;
+        // Two rigid bodies of one ragdoll: as their figure bodies would, unmerged (RagdollAsset::contactPairs).
+        const Ragdoll& r = *m_owner.m_ragdolls[static_cast<std::size_t>(a->ragdoll)];
+        const std::vector<int>* bodiesA = bodiesOf(r, compound);
+        const std::vector<int>* bodiesB = bodiesOf(r, other);
+        if (bodiesA == nullptr || bodiesB == nullptr || child < 0 || child >= static_cast<int>(bodiesA->size()) ||
+            otherChild >= static_cast<int>(bodiesB->size()))
+            return true;
+        const int i = (*bodiesA)[static_cast<std::size_t>(child)];
+        const auto& pairs = r.asset()->contactPairs();
+        for (std::size_t k = 0; k < bodiesB->size(); ++k) {
+            if (otherChild >= 0 && static_cast<int>(k) != otherChild) continue;
+            const int j = (*bodiesB)[k];
+            if (std::binary_search(pairs.begin(), pairs.end(), std::pair(std::min(i, j), std::max(i, j)))) return true;
+        }
+        return false;
+    }
+
+    btScalar breakingThreshold(const btCollisionObject& a, const btCollisionObject& b, btScalar dt) const override {
+        return m_owner.breakingThreshold(&a, &b, dt);
+    }
+
+  private:
+    // The figure bodies a rigid body of `r` carries (in its compound's child order), or null.
+    static const std::vector<int>* bodiesOf(const Ragdoll& r, const btCollisionObject& o) {
+        if (r.backend() != Backend::Rigid) return nullptr;
+        for (int k = 0; k < r.rigidBodyCount(); ++k)
+            if (&r.rigidBody(k) == &o) return &r.layout().rigids[static_cast<std::size_t>(k)].bodies;
+        return nullptr;
+    }
+
+    RagdollWorld& m_owner;
+    detail::CompoundCollision m_collision;
+};
+
 RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
     : m_world(world), m_method(method), m_action(std::make_unique<PositionAction>(*this)) {
     applyWorldKnobs(m_world, m_method);
     m_world.addAction(m_action.get());
+    if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(m_world.getDispatcher()))
+        m_mergedBodies = std::make_unique<MergedBodies>(*this, *dispatcher);
 }
 
-RagdollWorld::~RagdollWorld() { m_world.removeAction(m_action.get()); }
+RagdollWorld::~RagdollWorld() {
+    m_mergedBodies.reset();
+    m_world.removeAction(m_action.get());
+}
+
+const RagdollWorld::BodyOwner* RagdollWorld::ownerOf(const btCollisionObject* o) const {
+    const auto it =
+        std::lower_bound(m_owners.begin(), m_owners.end(), o, [](const BodyOwner& e, const btCollisionObject* key) {
+            return std::less<const btCollisionObject*>()(e.body, key);
+        });
+    return it != m_owners.end() && it->body == o ? &*it : nullptr;
+}
+
+// Linear speed plus angular speed times the shape's bounding radius, with a 25 % allowance for the acceleration
+// within the step.
+btScalar RagdollWorld::reachOf(const btCollisionObject* o, btScalar dt) const {
+    const BodyOwner* owned = ownerOf(o);
+    if (owned == nullptr) return 0;
+    // A multibody link's velocity is on its collider (MultibodyRagdoll::publishVelocities).
+    const btRigidBody* b = btRigidBody::upcast(o);
+    const btVector3& v = b ? b->getLinearVelocity() : o->getInterpolationLinearVelocity();
+    const btVector3& w = b ? b->getAngularVelocity() : o->getInterpolationAngularVelocity();
+    const btScalar speed = v.length() + w.length() * owned->boundingRadius;
+    return btScalar(1.25) * speed * dt;
+}
+
+btScalar RagdollWorld::breakingThreshold(const btCollisionObject* a, const btCollisionObject* b, btScalar dt) const {
+    if (!m_method.speculativeContacts) return gContactBreakingThreshold;
+    return btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reachOf(a, dt) + reachOf(b, dt));
+}
 
 void RagdollWorld::step(double dtSeconds) {
     for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step

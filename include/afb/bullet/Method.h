@@ -106,8 +106,9 @@ struct Method {
     /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
     /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
     /// nothing and cannot give. Every figure body keeps its pose (bodyTransforms, the skeleton). Rigid backend only.
-    /// Off by default: Bullet's compound algorithm tests a child only where its bounding box overlaps the other
-    /// body's, so a merged body's speculative contacts start late (README: Economy).
+    /// Spawned through a RagdollWorld, each part of a merged body makes the contacts it made unmerged (speculative
+    /// reach, self-collision pairs); in a plain world Bullet's compound algorithm runs. Off by default (README:
+    /// Economy).
     bool mergeFixed = false;
 
     friend bool operator==(const Method&, const Method&) = default;

@@ -63,6 +63,7 @@ class RagdollWorld {
 
   private:
     class PositionAction;
+    class MergedBodies;
     void addOwners(Ragdoll& ragdoll, int index);
     void trackJoints(Ragdoll& ragdoll);
 
@@ -77,7 +78,13 @@ class RagdollWorld {
         btScalar boundingRadius;
     };
     std::vector<BodyOwner> m_owners; ///< sorted by body
+    const BodyOwner* ownerOf(const btCollisionObject* body) const;
+    /// How far a ragdoll body's surface can move in `dt` seconds (0 for other objects), metres.
+    btScalar reachOf(const btCollisionObject* body, btScalar dt) const;
+    /// The contact breaking threshold of a manifold between `a` and `b` for a substep of `dt` (speculative contacts).
+    btScalar breakingThreshold(const btCollisionObject* a, const btCollisionObject* b, btScalar dt) const;
     std::unique_ptr<PositionAction> m_action;
+    std::unique_ptr<MergedBodies> m_mergedBodies; ///< contacts of merged bodies (Method::mergeFixed), child by child
 };
 
 /// A dynamics world and its solver, as makeWorld makes them (destroy the world first).
