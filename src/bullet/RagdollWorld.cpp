@@ -45,6 +45,9 @@ constexpr double kWakeDistanceM = 0.01;
 
 // The farthest a speculative contact reaches, metres: beyond it, continuous collision takes over.
 constexpr double kMaxSpeculativeM = 0.5;
+// How far a body can come within a step: its speed (centre plus spin at its bounding radius) times the step, with a
+// 25 % allowance for the acceleration within the step.
+constexpr btScalar kReachAllowance = btScalar(1.25);
 
 // Guards of the process-wide callback: installed by the first guard that finds it free, removed by the last.
 std::mutex gFrictionMutex;
@@ -235,8 +238,6 @@ class RagdollWorld::PositionAction : public btActionInterface {
         out.speed = out.velocity.length() + out.spin;
         return out;
     }
-    // A 25 % allowance for the acceleration within the step.
-    static constexpr btScalar kReachAllowance = btScalar(1.25);
 
     void positionPass(btCollisionWorld* world, int iterations) {
         // Contacts per ragdoll, in the dispatcher's order: one pass over the manifolds for all ragdolls.
@@ -355,7 +356,7 @@ btScalar RagdollWorld::reachOf(const btCollisionObject* o, btScalar dt) const {
     const btVector3& v = b ? b->getLinearVelocity() : o->getInterpolationLinearVelocity();
     const btVector3& w = b ? b->getAngularVelocity() : o->getInterpolationAngularVelocity();
     const btScalar speed = v.length() + w.length() * owned->boundingRadius;
-    return btScalar(1.25) * speed * dt;
+    return kReachAllowance * speed * dt;
 }
 
 btScalar RagdollWorld::breakingThreshold(const btCollisionObject* a, const btCollisionObject* b, btScalar dt) const {
