@@ -7,6 +7,8 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/SVD>
 #include <assimp/Importer.hpp>
@@ -14,6 +16,21 @@
 #include <assimp/scene.h>
 
 #include "afb/gen/Rig.h"
+
+// Debian's assimp is built with its internal asserts on (ASSIMP_BUILD_DEBUG), and its handler aborts the process:
+// malformed files reach them (the fuzzer found `out_idx != nullptr` in FBXConverter.cpp:1523). The library calls
+// this function through its PLT, so defining it here replaces that handler in every program that links the
+// generator: a failed assert throws, assimp's importer catches it as a failed import (its own try around each
+// format reader), and whatever escapes reaches the try in importRig/importRigFromMemory. The declaration in
+// <assimp/ai_assert.h> exists only in debug builds of assimp, so it is repeated here with the same signature.
+namespace Assimp {
+[[gnu::visibility("default")]] void aiAssertViolation(const char* failedExpression, const char* file, int line);
+void aiAssertViolation(const char* failedExpression, const char* file, int line) {
+    throw std::runtime_error(std::string("assimp's internal check failed: ") +
+                             (failedExpression ? failedExpression : "?") + " (" + (file ? file : "?") + ":" +
+                             std::to_string(line) + ")");
+}
+} // namespace Assimp
 
 namespace afb::gen {
 namespace {
@@ -321,9 +338,11 @@ std::optional<Rig> fromImporter(Assimp::Importer& importer, const aiScene* scene
     return std::nullopt;
 }
 
-constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_SortByPType;
-
 } // namespace
+
+unsigned assimpPostProcessSteps() {
+    return aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_SortByPType;
+}
 
 std::optional<Rig> importRig(const std::filesystem::path& path, const ImportOptions& options,
                              text::Diagnostics& diagnostics) {
@@ -346,7 +365,7 @@ std::optional<Rig> importRig(const std::filesystem::path& path, const ImportOpti
     }
     try {
         Assimp::Importer importer; // by path, so a .gltf finds its buffers beside it
-        const aiScene* scene = importer.ReadFile(label, kPostProcess);
+        const aiScene* scene = importer.ReadFile(label, assimpPostProcessSteps());
         return fromImporter(importer, scene, label, ext, options, diagnostics);
     } catch (const std::exception& e) {
         diagnostics.error({label, 0, 0}, std::string("cannot import: ") + e.what());
@@ -361,7 +380,7 @@ std::optional<Rig> importRigFromMemory(const void* data, std::size_t size, const
     const std::string label = "<model>." + hint;
     try {
         Assimp::Importer importer;
-        const aiScene* scene = importer.ReadFileFromMemory(data, size, kPostProcess, hint.c_str());
+        const aiScene* scene = importer.ReadFileFromMemory(data, size, assimpPostProcessSteps(), hint.c_str());
         return fromImporter(importer, scene, label, hint, options, diagnostics);
     } catch (const std::exception& e) {
         diagnostics.error({label, 0, 0}, std::string("cannot import: ") + e.what());

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <random>
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include "TestSupport.h"
@@ -179,6 +180,20 @@ TEST_CASE("gen: malformed models are errors, never crashes", "[gen]") {
     afb::text::Diagnostics diags;
     CHECK_FALSE(afb::gen::importRig("no/such/model.fbx", {}, diags));
     CHECK(diags.hasErrors());
+}
+
+// The replacement of assimp's assert handler (RigAssimp.cpp): the symbol assimp's own calls bind to (the first
+// definition in the process's global scope) is ours, and it throws instead of aborting.
+namespace Assimp {
+void aiAssertViolation(const char* failedExpression, const char* file, int line);
+}
+
+TEST_CASE("gen: a failed assimp assert throws instead of aborting the process", "[gen]") {
+    void* bound = ::dlsym(RTLD_DEFAULT, "_ZN6Assimp17aiAssertViolationEPKcS1_i");
+    REQUIRE(bound != nullptr);
+    CHECK(bound == reinterpret_cast<void*>(&Assimp::aiAssertViolation));
+    CHECK_THROWS_WITH(Assimp::aiAssertViolation("out_idx != nullptr", "FBXConverter.cpp", 1523),
+                      Catch::Contains("out_idx != nullptr") && Catch::Contains("FBXConverter.cpp:1523"));
 }
 
 TEST_CASE("gen: the malformed md5 files of assimp's test suite are errors", "[gen][corpus]") {

@@ -79,6 +79,9 @@ Rig rigFromMd5(const decl::Md5Mesh& mesh);
 std::optional<Rig> importRig(const std::filesystem::path& path, const ImportOptions& options,
                              text::Diagnostics& diagnostics);
 
+/// The post-processing steps (aiPostProcessSteps flags) importRig asks assimp for.
+unsigned assimpPostProcessSteps();
+
 /// Like importRig for a model in memory (`hint`: the file extension without the dot, e.g. "glb"); for the fuzzer.
 std::optional<Rig> importRigFromMemory(const void* data, std::size_t size, const std::string& hint,
                                        const ImportOptions& options, text::Diagnostics& diagnostics);
