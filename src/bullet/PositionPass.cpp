@@ -7,8 +7,10 @@
 #include "PositionPass.h"
 
 #include <algorithm>
+#include <numeric>
 #include <vector>
 
+#include "BlockTree.h"
 #include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
@@ -210,9 +212,185 @@ bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
     return true;
 }
 
+// Every joint at once: a Newton step on the ragdoll's joint tree with the bodies' masses (Baraff's block
+// factorisation, as the direct velocity solve uses), so that closing one joint does not open its neighbours.
+// Per joint: the anchor gap (3 rows), the locked axes (fixed: 3, hinge: 2) and the limit rows past their limit
+// (as equalities: the step puts them back on the limit). Joints that close a loop, a second joint to the world in
+// one tree, and sliders are left to the sweeps. Nodes: the movable bodies (6: position, rotation vector), then
+// the joints; H = [[M, −Jᵀ], [−J, 0]], H [Δx; λ] = [0; C], so that J Δx = −C and M Δx = Jᵀ λ.
+class JointTree {
+  public:
+    struct Joint {
+        int constraint;
+        int a, b; // body indices; −1: immovable
+    };
+    // A joint's rows this step: the two anchor copies, and angular rows J_A = [0, n], J_B = [0, −n], each with
+    // its error C (the step makes C + n·(Δθ_A − Δθ_B) = 0).
+    struct Rows {
+        btVector3 anchorA, anchorB;
+        int angular = 0;
+        btVector3 axis[5];
+        btScalar error[5];
+    };
+    // Lays the tree out once per pass from the joints' endpoints; false when there is nothing to solve.
+    bool build(std::vector<Joint> joints, int bodies) {
+        m_bodies = bodies;
+        std::vector<int> root(static_cast<std::size_t>(bodies));
+        std::iota(root.begin(), root.end(), 0);
+        std::vector<char> grounded(static_cast<std::size_t>(bodies), 0);
+        const auto find = [&](int i) {
+            while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)];
+            return i;
+        };
+        m_joints.clear();
+        for (const Joint& j : joints) {
+            if (j.a < 0 && j.b < 0) continue;
+            if (j.a >= 0 && j.b >= 0) {
+                const int ra = find(j.a), rb = find(j.b);
+                if (ra == rb) continue; // closes a loop
+                if (grounded[static_cast<std::size_t>(ra)] && grounded[static_cast<std::size_t>(rb)]) continue;
+                root[static_cast<std::size_t>(ra)] = rb;
+                grounded[static_cast<std::size_t>(rb)] |= grounded[static_cast<std::size_t>(ra)];
+            } else {
+                const int r = find(j.a >= 0 ? j.a : j.b);
+                if (grounded[static_cast<std::size_t>(r)]) continue; // a second hold on the world
+                grounded[static_cast<std::size_t>(r)] = 1;
+            }
+            m_joints.push_back(j);
+        }
+        if (m_joints.empty()) return false;
+        // Parents: a grounded tree hangs from its world joint, any other from its first body.
+        const int nodes = bodies + static_cast<int>(m_joints.size());
+        m_parent.assign(static_cast<std::size_t>(nodes), -2);
+        std::vector<std::vector<int>> jointsAt(static_cast<std::size_t>(bodies));
+        for (std::size_t k = 0; k < m_joints.size(); ++k) {
+            if (m_joints[k].a >= 0) jointsAt[static_cast<std::size_t>(m_joints[k].a)].push_back(static_cast<int>(k));
+            if (m_joints[k].b >= 0) jointsAt[static_cast<std::size_t>(m_joints[k].b)].push_back(static_cast<int>(k));
+        }
+        std::vector<int> stack;
+        auto hang = [&](int body) { // everything reachable from `body`, whose parent is already set
+            stack.push_back(body);
+            while (!stack.empty()) {
+                const int x = stack.back();
+                stack.pop_back();
+                for (int k : jointsAt[static_cast<std::size_t>(x)]) {
+                    const int node = bodies + k;
+                    if (m_parent[static_cast<std::size_t>(node)] != -2) continue;
+                    m_parent[static_cast<std::size_t>(node)] = x;
+                    const Joint& j = m_joints[static_cast<std::size_t>(k)];
+                    const int other = j.a == x ? j.b : j.a;
+                    if (other < 0 || m_parent[static_cast<std::size_t>(other)] != -2) continue;
+                    m_parent[static_cast<std::size_t>(other)] = node;
+                    stack.push_back(other);
+                }
+            }
+        };
+        for (std::size_t k = 0; k < m_joints.size(); ++k) {
+            const Joint& j = m_joints[k];
+            if (j.a >= 0 && j.b >= 0) continue;
+            const int body = j.a >= 0 ? j.a : j.b;
+            m_parent[static_cast<std::size_t>(bodies) + k] = -1;
+            m_parent[static_cast<std::size_t>(body)] = bodies + static_cast<int>(k);
+            hang(body);
+        }
+        for (int x = 0; x < bodies; ++x)
+            if (m_parent[static_cast<std::size_t>(x)] == -2) {
+                m_parent[static_cast<std::size_t>(x)] = -1;
+                hang(x);
+            }
+        return true;
+    }
+
+    // One Newton step of `sides` for the joints' rows (`rowsOf(joint)`). False (nothing moved) when every row is
+    // within its tolerance already, or the factorisation fails.
+    template <typename RowsOf>
+    bool step(std::vector<Side>& sides, RowsOf rowsOf) {
+        const int bodies = m_bodies;
+        m_rows.resize(m_joints.size());
+        m_dims.assign(m_parent.size(), 6);
+        bool open = false;
+        for (std::size_t k = 0; k < m_joints.size(); ++k) {
+            m_rows[k] = rowsOf(m_joints[k]);
+            const Rows& r = m_rows[k];
+            m_dims[static_cast<std::size_t>(bodies) + k] = 3 + r.angular;
+            open = open || (r.anchorB - r.anchorA).length2() > kAnchorToleranceM * kAnchorToleranceM;
+            for (int i = 0; i < r.angular; ++i) open = open || btFabs(r.error[i]) > kAngleToleranceRad;
+        }
+        if (!open || !m_tree.reset(m_dims, m_parent)) return false;
+        for (int x = 0; x < bodies; ++x) {
+            const Side& s = sides[static_cast<std::size_t>(x)];
+            double* d = m_tree.diag(x);
+            std::fill(d, d + 36, 0.0);
+            if (s.body == nullptr) { // immovable inside the tree: a very heavy body
+                for (int q = 0; q < 6; ++q) d[7 * q] = 1e12;
+                continue;
+            }
+            const btVector3& il = s.invInertiaLocal;
+            const auto inv = [](btScalar v) { return v > 0 ? 1 / v : btScalar(1e12); };
+            const btMatrix3x3 inertia = s.r.scaled(btVector3(inv(il.x()), inv(il.y()), inv(il.z()))) * s.r.transpose();
+            for (int q = 0; q < 3; ++q) {
+                d[7 * q] = 1.0 / double(s.invMass);
+                for (int c = 0; c < 3; ++c) d[6 * (3 + q) + 3 + c] = double(inertia[q][c]);
+            }
+        }
+        m_rhs.assign(static_cast<std::size_t>(m_tree.size()), 0.0);
+        double negJ[8 * 6]; // −J of one side, rows × 6, row-major
+        for (std::size_t k = 0; k < m_joints.size(); ++k) {
+            const Joint& j = m_joints[k];
+            const Rows& r = m_rows[k];
+            const int node = bodies + static_cast<int>(k);
+            const int rows = 3 + r.angular;
+            std::fill(m_tree.diag(node), m_tree.diag(node) + rows * rows, 0.0);
+            double* rhs = m_rhs.data() + m_tree.offset(node);
+            const btVector3 gap = r.anchorB - r.anchorA;
+            for (int q = 0; q < 3; ++q) rhs[q] = double(gap[q]);
+            for (int i = 0; i < r.angular; ++i) rhs[3 + i] = double(r.error[i]);
+            // J_A = [−I, [r_A]×; 0, n], J_B = [I, −[r_B]×; 0, −n].
+            for (int side = 0; side < 2; ++side) {
+                const int x = side ? j.b : j.a;
+                if (x < 0) continue;
+                const Side& s = sides[static_cast<std::size_t>(x)];
+                const btMatrix3x3 rx = skew((side ? r.anchorB : r.anchorA) - s.x);
+                const double sign = side ? 1.0 : -1.0;
+                std::fill(negJ, negJ + 6 * rows, 0.0);
+                for (int q = 0; q < 3; ++q) {
+                    negJ[6 * q + q] = -sign;
+                    for (int c = 0; c < 3; ++c) negJ[6 * q + 3 + c] = sign * double(rx[q][c]);
+                }
+                for (int i = 0; i < r.angular; ++i)
+                    for (int c = 0; c < 3; ++c) negJ[6 * (3 + i) + 3 + c] = sign * double(r.axis[i][c]);
+                if (m_tree.parent(node) == x) {
+                    std::copy(negJ, negJ + 6 * rows, m_tree.toParent(node)); // H_{joint,body}
+                } else { // the body hangs from the joint: H_{body,joint} = (H_{joint,body})ᵀ
+                    double* e = m_tree.toParent(x);
+                    for (int q = 0; q < rows; ++q)
+                        for (int c = 0; c < 6; ++c) e[rows * c + q] = negJ[6 * q + c];
+                }
+            }
+        }
+        if (!m_tree.factor()) return false;
+        m_tree.solve(m_rhs.data());
+        if (!std::all_of(m_rhs.begin(), m_rhs.end(), [](double v) { return std::isfinite(v); })) return false;
+        for (int x = 0; x < bodies; ++x) {
+            const double* dx = m_rhs.data() + m_tree.offset(x);
+            move(sides[static_cast<std::size_t>(x)], btVector3(btScalar(dx[0]), btScalar(dx[1]), btScalar(dx[2])),
+                 btVector3(btScalar(dx[3]), btScalar(dx[4]), btScalar(dx[5])));
+        }
+        return true;
+    }
+
+  private:
+    int m_bodies = 0;
+    std::vector<Joint> m_joints;
+    std::vector<int> m_parent, m_dims;
+    std::vector<Rows> m_rows;
+    BlockTree m_tree;
+    std::vector<double> m_rhs;
+};
+
 } // namespace
 
-void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const> manifolds) {
+void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentManifold* const> manifolds) {
     const figure::Figure& f = r.figure();
     std::vector<Side> bodies;
     // One side per Bullet rigid body (figure bodies merged by Method::mergeFixed share one).
@@ -238,6 +416,76 @@ void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const>
     }
     Side immovableA, immovableB;
     const btMatrix3x3 spawnBasis = r.spawnTransform().getBasis();
+    JointTree tree;
+    const bool haveTree = treeMode > 0 && [&] {
+        std::vector<JointTree::Joint> joints;
+        for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
+            const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
+            if (c.type == figure::JointType::Spring || c.type == figure::JointType::Slider) continue;
+            const int a = r.rigidIndexOf(c.body1);
+            const int b = c.body2 >= 0 ? r.rigidIndexOf(c.body2) : -1;
+            if (a == b) continue; // merged: holds exactly
+            joints.push_back({i, bodies[static_cast<std::size_t>(a)].body ? a : -1,
+                              b >= 0 && bodies[static_cast<std::size_t>(b)].body ? b : -1});
+        }
+        return tree.build(std::move(joints), static_cast<int>(bodies.size()));
+    }();
+    auto rowsOf = [&](const JointTree::Joint& j) {
+        const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(j.constraint)];
+        Side& a = j.a >= 0 ? bodies[static_cast<std::size_t>(j.a)] : immovableA;
+        Side& b = j.b >= 0 ? bodies[static_cast<std::size_t>(j.b)] : world;
+        const Frames fr = framesOf(a, b, r.rigidFramesLocal(j.constraint));
+        JointTree::Rows rows;
+        rows.anchorA = fr.a.getOrigin();
+        rows.anchorB = fr.b.getOrigin();
+        if (treeMode < 2) return rows;
+        if (c.type == figure::JointType::Fixed) {
+            btQuaternion q;
+            (fr.b.getBasis() * fr.a.getBasis().transpose()).getRotation(q);
+            if (q.w() < 0) q = -q;
+            const btScalar angle = q.getAngle();
+            const btVector3 delta = angle > SIMD_EPSILON ? q.getAxis() * angle : btVector3(0, 0, 0);
+            for (int i = 0; i < 3; ++i) {
+                rows.axis[rows.angular] = btVector3(i == 0, i == 1, i == 2);
+                rows.error[rows.angular++] = -delta[i];
+            }
+        } else if (c.type == figure::JointType::Hinge) {
+            const btVector3 zb = fr.b.getBasis().getColumn(2);
+            const btVector3 delta = turnOnto(fr.a.getBasis().getColumn(2), zb);
+            btVector3 n1(0, 0, 0), n2(0, 0, 0);
+            btPlaneSpace1(zb, n1, n2);
+            for (const btVector3& n : {n1, n2}) {
+                rows.axis[rows.angular] = n;
+                rows.error[rows.angular++] = -delta.dot(n);
+            }
+        }
+        LimitRow limit[2];
+        int n = 0;
+        const btMatrix3x3 body1Basis = a.r * r.bodyInRigid(c.body1).getBasis();
+        const btMatrix3x3 body2Basis = b.body ? b.r * r.bodyInRigid(c.body2).getBasis() : spawnBasis;
+        if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
+            n = hingeRangeRow(fr.a.getBasis(), fr.b.getBasis(), static_cast<btScalar>(h->lowerRad),
+                              static_cast<btScalar>(h->upperRad), 0, limit[0]);
+        } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
+            btVector3 y, z;
+            const btVector3 axis = (body2Basis * toBt(cone->axisInBody2)).normalized();
+            btPlaneSpace1(axis, y, z);
+            btMatrix3x3 basis;
+            basis.setValue(axis.x(), y.x(), z.x(), axis.y(), y.y(), z.y(), axis.z(), y.z(), z.z());
+            n = directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
+                                   static_cast<btScalar>(cone->halfAngleRad), 0, 0, limit);
+        } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
+            n = directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
+                                   LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
+                                   static_cast<btScalar>(p->halfAngle2Rad), 0, limit);
+        }
+        for (int i = 0; i < n; ++i)
+            if (limit[i].excess > kAngleToleranceRad && rows.angular < 5) {
+                rows.axis[rows.angular] = limit[i].axisWorld;
+                rows.error[rows.angular++] = limit[i].excess;
+            }
+        return rows;
+    };
     for (int sweep = 0; sweep < sweeps; ++sweep) {
         bool corrected = false;
         for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
@@ -265,6 +513,10 @@ void positionPass(Ragdoll& r, int sweeps, std::span<btPersistentManifold* const>
         }
         if (!corrected) break; // nothing left to correct
     }
+    // Then the joints over the tree: Newton steps until every row is within tolerance (two at most: the
+    // sweeps left the errors small, and one step leaves only the second-order rest).
+    for (int n = 0; haveTree && n < 2; ++n)
+        if (!tree.step(bodies, rowsOf)) break;
     for (Side& s : bodies)
         if (s.moved) s.body->setCenterOfMassTransform(s.transform());
 }

@@ -130,7 +130,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
         if (m_owner.m_ragdolls.empty()) return;
         wakeTouched(world);
         const int iterations = m_owner.m_method.positionIterations;
-        if (iterations > 0) positionPass(world, iterations);
+        if (iterations > 0 || m_owner.m_method.positionTree > 0) positionPass(world, iterations);
         if (m_owner.m_method.speculativeContacts) {
             publishMultibodyVelocities();
             widenContacts(world, dt);
@@ -256,7 +256,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
             Ragdoll& r = *m_owner.m_ragdolls[k];
             // A multibody ragdoll's tree joints hold by construction; the pass moves rigid bodies only.
             if (r.atRest() || r.backend() == Backend::Multibody) continue;
-            detail::positionPass(r, iterations, m_contacts[k]);
+            detail::positionPass(r, iterations, m_owner.m_method.positionTree, m_contacts[k]);
         }
     }
     void debugDraw(btIDebugDraw*) override {}

@@ -45,6 +45,8 @@ std::string rawMethodError(const bullet::Method& m) {
     if (!isRaw(m)) return {};
     std::string knobs;
     if (m.positionIterations > 0) knobs += " position-iterations";
+    if (m.positionTree > 0) knobs += " position-tree";
+    if (m.directJoints) knobs += " direct-joints";
     if (m.speculativeContacts) knobs += " speculative-contacts";
     if (m.speculativeLimits) knobs += " speculative-limits";
     if (m.jointWarmStarting) knobs += " joint-warm-starting";

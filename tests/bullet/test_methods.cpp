@@ -117,6 +117,108 @@ TEST_CASE("position pass: a separated joint is closed within one step", "[bullet
     CHECK(with < 1e-4);
 }
 
+TEST_CASE("position tree: every joint of a separated chain is closed at once", "[bullet][methods]") {
+    // A free chain of four boxes of unequal mass (ball joints, no gravity, no ground, at rest), its two middle
+    // bodies pulled off the line by 5 and 4 cm: all three joints are open, and closing one by moving its two
+    // bodies opens its neighbours. One Gauss–Seidel sweep leaves centimetres; the tree step (Newton on the
+    // joint tree with the bodies' masses) closes all three within 0.1 mm at once, by internal moves only, so
+    // the chain's centre of mass stays where it was.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                      {"b1", 0, 20, 0, 0},
+                                                      {"b2", 1, 40, 0, 0},
+                                                      {"b3", 2, 60, 0, 0}};
+    const std::string af =
+        "articulatedFigure chain {\n settings { selfCollision 0 }\n"
+        " body \"b0\" { joint \"origin\" model box( ( -8, -2, -2 ), ( 8, 2, 2 ) ) origin ( 0, 0, 0 ) "
+        "density 0.2 }\n"
+        " body \"b1\" { joint \"b1\" model box( ( -8, -2, -2 ), ( 8, 2, 2 ) ) origin ( 20, 0, 0 ) "
+        "density 0.02 }\n"
+        " body \"b2\" { joint \"b2\" model box( ( -8, -3, -3 ), ( 8, 3, 3 ) ) origin ( 40, 0, 0 ) "
+        "density 0.1 }\n"
+        " body \"b3\" { joint \"b3\" model box( ( -8, -2, -2 ), ( 8, 2, 2 ) ) origin ( 60, 0, 0 ) "
+        "density 0.05 }\n"
+        " ballAndSocketJoint \"j1\" { body1 \"b1\" body2 \"b0\" anchor ( 10, 0, 0 ) friction 0 }\n"
+        " ballAndSocketJoint \"j2\" { body1 \"b2\" body2 \"b1\" anchor ( 30, 0, 0 ) friction 0 }\n"
+        " ballAndSocketJoint \"j3\" { body1 \"b3\" body2 \"b2\" anchor ( 50, 0, 0 ) friction 0 }\n"
+        "}\n";
+    const auto built = afb::test::buildTestFigure(af, joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    const afb::figure::Figure& f = *built.figure;
+    REQUIRE(f.constraints.size() == 3);
+    struct Result {
+        double worstGapM;
+        btVector3 comShift;
+    };
+    auto afterOneStep = [&](const Method& method) {
+        ArmScene s(f, method, 0);
+        auto com = [&] {
+            btVector3 sum(0, 0, 0);
+            btScalar mass = 0;
+            for (int i = 0; i < s.ragdoll->bodyCount(); ++i) {
+                const btRigidBody& b = s.ragdoll->body(i);
+                sum += b.getCenterOfMassPosition() / b.getInvMass();
+                mass += 1 / b.getInvMass();
+            }
+            return sum / mass;
+        };
+        const btVector3 pull[] = {{0, 0, 0}, {0, btScalar(0.05), 0}, {0, 0, btScalar(-0.04)}, {0, 0, 0}};
+        for (int i = 0; i < 4; ++i) {
+            btTransform t = s.ragdoll->body(i).getCenterOfMassTransform();
+            t.getOrigin() += pull[i];
+            s.ragdoll->body(i).setCenterOfMassTransform(t);
+        }
+        REQUIRE(s.anchorError(0) > 0.03);
+        const btVector3 before = com();
+        s.scene.step(1.0 / 60.0);
+        double worst = 0;
+        for (int c = 0; c < 3; ++c) worst = std::max(worst, s.anchorError(c));
+        return Result{worst, com() - before};
+    };
+    Method sweep = methodWith("position-iterations", "1");
+    const Result swept = afterOneStep(sweep);
+    Method tree = methodWith("position-iterations", "0");
+    REQUIRE(afb::bullet::setKnob(tree, *afb::bullet::findKnob("position-tree"), "1").empty());
+    const Result treed = afterOneStep(tree);
+    INFO("one sweep " << swept.worstGapM << " m, tree " << treed.worstGapM << " m");
+    CHECK(swept.worstGapM > 0.005);
+    CHECK(treed.worstGapM < 1e-4);
+    CHECK(treed.comShift.length() < 1e-5);
+}
+
+TEST_CASE("position tree 2: a hinge pushed past its stop is put back on it", "[bullet][methods]") {
+    // The arm turned down about the hinge, 25° past its upper stop (φ ∈ [0°, 30°]), held still with no gravity:
+    // the velocity solve starts to turn it back (Baumgarte), the tree step with limits puts it on the stop.
+    const afb::figure::Figure f = armFigure("hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
+                                            "axis ( 0, 1, 0 ) friction 0 limit 0, 30, 0 }");
+    auto excessDegAfterOneStep = [&](const std::string& tree) {
+        Method m = methodWith("position-iterations", "0");
+        REQUIRE(afb::bullet::setKnob(m, *afb::bullet::findKnob("position-tree"), tree).empty());
+        ArmScene s(f, m, 0);
+        // Turn the arm about the anchor (0, 0, 100 units) about Y (φ > 0 turns it down) until 25° past the stop.
+        const btVector3 pivot(0, 0, btScalar(100 * kUnit));
+        const double phi0Deg = s.ragdoll->jointError(1).limitExcessRad / kDeg; // 0: within the range
+        REQUIRE(phi0Deg == 0);
+        const btQuaternion turn(btVector3(0, 1, 0), btScalar(55 * kDeg));
+        btTransform t = s.ragdoll->body(1).getCenterOfMassTransform();
+        t.setOrigin(pivot + quatRotate(turn, t.getOrigin() - pivot));
+        t.setRotation(turn * t.getRotation());
+        s.ragdoll->body(1).setCenterOfMassTransform(t);
+        const double excessDeg = s.ragdoll->jointError(1).limitExcessRad / kDeg;
+        INFO("excess before the step " << excessDeg << " deg");
+        REQUIRE(excessDeg > 15);
+        s.scene.step(1.0 / 60.0);
+        return std::pair{s.ragdoll->jointError(1).limitExcessRad / kDeg, s.anchorError(1)};
+    };
+    const auto [anchorsOnly, anchorsOnlyGap] = excessDegAfterOneStep("1");
+    const auto [withLimits, gap] = excessDegAfterOneStep("2");
+    INFO("tree 1: " << anchorsOnly << " deg, tree 2: " << withLimits << " deg");
+    CHECK(anchorsOnly > 5);
+    CHECK(withLimits < 0.05);
+    CHECK(gap < 1e-4);
+    CHECK(anchorsOnlyGap < 1e-4);
+}
+
 TEST_CASE("speculative limits: a falling pendulum stops at its hinge limit", "[bullet][methods]") {
     // The arm falls from horizontal about the hinge (axis Y, φ > 0 turns it down) and meets the stop at
     // φ = 60° with ω = sqrt(2·m·g·c·sin 60° / I) ≈ 7.1 rad/s (c = 0.254 m to the centre of mass, I = m·L²/3

@@ -65,6 +65,12 @@ struct Method {
     /// (Backend::Multibody) runs its own sweeps over its limits and contacts, in any world, from its
     /// SpawnOptions::method.
     int positionIterations = 4;
+    /// After the sweeps, Newton steps over each ragdoll's joint tree (its bodies' masses, Baraff's factorisation,
+    /// as the direct velocity solve uses), which close every joint at once instead of one after another:
+    /// 0 = off; 1 = the anchors (to 0.1 mm); 2 = also the locked axes and the limit rows past their limit. The
+    /// step does not include contacts: 2 holds limits to tenths of a degree but pushes limbs deeper into the
+    /// ground (README: Methods). Joints that close a loop and sliders are left to the sweeps.
+    int positionTree = 0;
     /// Full contact manifolds on planes: hulls and boxes against a static plane take their contact points from
     /// the (up to four) vertices that come nearest the plane within the step, kept from step to step by vertex
     /// (afbullet's own polytope–plane algorithm; Bullet's finds one point per step, and its manifold merges
