@@ -15,7 +15,7 @@ namespace detail {
 
 /// `sweeps` sweeps over `ragdoll`: every joint's limit, locked axes and anchor, then every contact point of
 /// `manifolds` (those touching the ragdoll's bodies) deeper than the slop. Then, with `tree` 1 or 2
-/// (Method::positionTree), up to two Newton steps over the ragdoll's joint tree that close every anchor at once
+/// (Method::positionTree), up to three Newton steps over the ragdoll's joint tree that close every anchor at once
 /// (1), and with 2 also the locked axes and the limit rows past their limit; contacts are not part of the tree
 /// step. Only the ragdoll's own bodies move; poses are written back to Bullet once, at the end.
 void positionPass(Ragdoll& ragdoll, int sweeps, int tree, std::span<btPersistentManifold* const> manifolds);
