@@ -29,7 +29,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
         {"fast", 0.025, 16, 0.01},    // measured 21.5 mm, 14.5°, 4.3 mm
         {"default", 0.024, 14, 0.01}, // 20.3 mm, 12.7°, 3.1 mm
         {"accurate", 0.012, 6, 0.01}, // 8.9 mm, 2.8°, 4.3 mm
-        {"exact", 0.006, 5, 0.01},    // 3.4 mm, 3.0° (direct joint solve), 2.8 mm
+        {"exact", 0.001, 4, 0.01},    // 0.1 mm, 2.8° (direct joint solve, tree position step), 2.4 mm
     };
     afb::sim::DropOptions o;
     o.heightM = 1.0;
