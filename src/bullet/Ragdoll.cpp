@@ -362,8 +362,48 @@ void Ragdoll::freezeBodies() {
     }
 }
 
+// Margin round the bodies' bounding boxes of the sunk ragdoll's box (metres): more than the wake distance of a
+// frozen ragdoll's contacts (RagdollWorld), so that an active object comes back to the bodies before it can touch.
+constexpr btScalar kRestProxyMarginM = btScalar(0.05);
+
+void Ragdoll::sink() {
+    if (!m_frozen || m_restProxy || m_multibody) return;
+    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
+    int mask = 0;
+    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+        btVector3 a, b;
+        m_bodies[i]->getCollisionShape()->getAabb(m_bodies[i]->getWorldTransform(), a, b);
+        lo.setMin(a);
+        hi.setMax(b);
+        mask |= m_masks[i];
+    }
+    const btVector3 margin(kRestProxyMarginM, kRestProxyMarginM, kRestProxyMarginM);
+    lo -= margin;
+    hi += margin;
+    m_restProxyShape = std::make_unique<btBoxShape>((hi - lo) * btScalar(0.5));
+    m_restProxy = std::make_unique<btCollisionObject>();
+    m_restProxy->setCollisionShape(m_restProxyShape.get());
+    m_restProxy->setWorldTransform(btTransform(btQuaternion::getIdentity(), (lo + hi) * btScalar(0.5)));
+    m_restProxy->setCollisionFlags(btCollisionObject::CF_STATIC_OBJECT | btCollisionObject::CF_NO_CONTACT_RESPONSE);
+    m_restProxy->setUserPointer(this);
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+    m_world.addCollisionObject(m_restProxy.get(), btBroadphaseProxy::StaticFilter,
+                               mask & ~btBroadphaseProxy::StaticFilter);
+}
+
+void Ragdoll::surface() {
+    if (!m_restProxy) return;
+    m_world.removeCollisionObject(m_restProxy.get());
+    m_restProxy.reset();
+    m_restProxyShape.reset();
+    for (std::size_t i = 0; i < m_bodies.size(); ++i)
+        m_world.addRigidBody(m_bodies[i].get(), btBroadphaseProxy::StaticFilter,
+                             m_masks[i] & ~btBroadphaseProxy::StaticFilter);
+}
+
 void Ragdoll::thawBodies() {
     if (!m_frozen) return;
+    surface();
     m_frozen = false;
     for (std::size_t i = 0; i < m_bodies.size(); ++i) {
         btRigidBody& b = *m_bodies[i];
@@ -409,6 +449,7 @@ std::string_view toString(GuardTrip::Cause cause) {
 
 Ragdoll::~Ragdoll() {
     if (m_manager) m_manager->detach(*this);
+    surface();               // its bodies back in the world, to be removed with the rest
     if (m_multibody) return; // its destructor removes its trees, colliders and constraints
     m_world.removeAction(m_action.get());
     for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());

@@ -42,6 +42,9 @@ bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* 
 // A contact point this close (metres; a speculative contact stops an approaching body at about 0) wakes a frozen
 // ragdoll.
 constexpr double kWakeDistanceM = 0.01;
+// Substeps a frozen ragdoll stays in the world with nothing active near before it sinks (Ragdoll::sunk): half a
+// second at 60 Hz, so that an object passing by does not make it go in and out of the world every substep.
+constexpr int kSinkAfterSubsteps = 30;
 
 // The farthest a speculative contact reaches, metres: beyond it, continuous collision takes over.
 constexpr double kMaxSpeculativeM = 0.5;
@@ -157,16 +160,24 @@ class RagdollWorld::PositionAction : public btActionInterface {
     // waking re-adds its bodies.
     void wakeTouched(btCollisionWorld* world) {
         m_toWake.clear();
+        m_toSurface.clear();
+        m_near.assign(m_owner.m_ragdolls.size(), 0);
         btDispatcher* dispatcher = world->getDispatcher();
         btPersistentManifold** manifolds = dispatcher->getInternalManifoldPointer();
         for (int i = 0, n = dispatcher->getNumManifolds(); i < n; ++i) {
             const btPersistentManifold* m = manifolds[i];
-            if (m->getNumContacts() == 0) continue;
             for (const auto& [resting, toucher] :
                  {std::pair{m->getBody0(), m->getBody1()}, {m->getBody1(), m->getBody0()}}) {
                 if (!toucher->isActive() || !resting->isStaticObject()) continue;
+                // A sunk ragdoll's box met by an active object: its bodies come back (frozen).
+                if (Ragdoll* sunk = sunkOwner(resting)) {
+                    m_toSurface.push_back(sunk);
+                    continue;
+                }
                 const int r = owner(resting);
                 if (r < 0 || !m_owner.m_ragdolls[static_cast<std::size_t>(r)]->frozen()) continue;
+                m_near[static_cast<std::size_t>(r)] = 1; // an active object's box overlaps one of its bodies'
+                if (m->getNumContacts() == 0) continue;
                 // A toucher slower than the frozen figure's own rest speed does not wake it (two ragdolls coming to
                 // rest against each other would wake each other in turn forever).
                 if (const btRigidBody* b = btRigidBody::upcast(toucher);
@@ -182,6 +193,26 @@ class RagdollWorld::PositionAction : public btActionInterface {
         for (const int r : m_toWake)
             if (m_owner.m_ragdolls[static_cast<std::size_t>(r)]->frozen())
                 m_owner.m_ragdolls[static_cast<std::size_t>(r)]->wake();
+        for (Ragdoll* r : m_toSurface) {
+            r->surface();
+            r->m_calmSubsteps = 0;
+        }
+        // A frozen ragdoll with nothing active near it for kSinkAfterSubsteps substeps sinks (Ragdoll::sunk).
+        for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
+            Ragdoll& r = *m_owner.m_ragdolls[k];
+            if (!m_owner.m_sinking || !r.frozen() || r.sunk() || r.backend() != Backend::Rigid) continue;
+            if (m_near[k]) r.m_calmSubsteps = 0;
+            else if (++r.m_calmSubsteps >= kSinkAfterSubsteps) r.sink();
+        }
+    }
+
+    // The ragdoll whose sunk box `o` is, if it is one.
+    Ragdoll* sunkOwner(const btCollisionObject* o) const {
+        if (!(o->getCollisionFlags() & btCollisionObject::CF_NO_CONTACT_RESPONSE) || o->getUserPointer() == nullptr)
+            return nullptr;
+        for (const auto& r : m_owner.m_ragdolls)
+            if (r->m_restProxy.get() == o) return r;
+        return nullptr;
     }
 
     // How a body moves, for the speculative reach: a ragdoll body's velocity (a multibody link's is on its
@@ -271,6 +302,8 @@ class RagdollWorld::PositionAction : public btActionInterface {
     btScalar m_gravityDt = 0; ///< the speed gravity adds in a substep, m/s
     std::vector<std::vector<btPersistentManifold*>> m_contacts;
     std::vector<int> m_toWake;
+    std::vector<Ragdoll*> m_toSurface;
+    std::vector<char> m_near;
 };
 
 // The world's answers to the merged-body algorithm (detail::CompoundCollision): which compounds are merged ragdoll

@@ -23,6 +23,7 @@ Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
         m_world->addRigidBody(m_ground.get());
     }
     m_ragdollWorld = std::make_unique<bullet::RagdollWorld>(*m_world, m_method);
+    m_ragdollWorld->setSinking(true); // the scene's own world: nothing ray-tests resting ragdolls behind our back
 }
 
 Scene::~Scene() {

@@ -260,3 +260,95 @@ TEST_CASE("economy: a frozen ragdoll wakes when a falling body lands on it", "[b
     CHECK_FALSE(falling.atRest());
     CHECK_FALSE(resting.atRest());
 }
+
+TEST_CASE("economy: a frozen ragdoll with nothing active near sinks behind one box, and comes back when approached",
+          "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    const int objectsBefore = scene.world().getNumCollisionObjects();
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& resting = scene.spawn(asset, o);
+    CHECK(scene.world().getNumCollisionObjects() == objectsBefore + resting.rigidBodyCount());
+    for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
+    CHECK(resting.frozen());
+    CHECK(resting.sunk());
+    CHECK(scene.world().getNumCollisionObjects() == objectsBefore + 1); // one box instead of its bodies
+    // surface() brings the bodies back, frozen (a game about to ray-test it); quiet, it sinks again.
+    resting.surface();
+    CHECK_FALSE(resting.sunk());
+    CHECK(resting.frozen());
+    CHECK(scene.world().getNumCollisionObjects() == objectsBefore + resting.rigidBodyCount());
+    for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
+    CHECK(resting.sunk());
+    // A second humanoid dropped onto it from 3 m above its head: it lands after the first one sank (about 0.8 s of
+    // fall), brings its bodies back as it nears, and wakes it when it touches.
+    bullet::SpawnOptions above;
+    above.entityTransform = o.entityTransform;
+    above.entityTransform.getOrigin() += btVector3(0.1f, 0, 4.8f);
+    bullet::Ragdoll& falling = scene.spawn(asset, above);
+    int surfacedAt = -1, wokeAt = -1;
+    for (int s = 0; s < 180 && wokeAt < 0; ++s) {
+        scene.step(1.0 / 60);
+        if (surfacedAt < 0 && !resting.sunk()) surfacedAt = s;
+        if (!resting.frozen()) wokeAt = s;
+    }
+    INFO("surfaced at step " << surfacedAt << ", woke at step " << wokeAt);
+    CHECK(surfacedAt > 20);      // not before the faller got near
+    CHECK(wokeAt >= surfacedAt); // its bodies were back before the touch
+    CHECK(wokeAt > 0);
+    CHECK_FALSE(falling.atRest());
+}
+
+TEST_CASE("economy: sinking is off in a RagdollWorld unless turned on", "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    scene.ragdollWorld().setSinking(false);
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& r = scene.spawn(asset, o);
+    for (int s = 0; s < 120; ++s) scene.step(1.0 / 60);
+    CHECK(r.frozen());
+    CHECK_FALSE(r.sunk());
+}
+
+TEST_CASE("economy: a sunk ragdoll wakes whole on an impulse and is removed cleanly", "[bullet][economy]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    const int objectsBefore = scene.world().getNumCollisionObjects();
+    const int constraintsBefore = scene.world().getNumConstraints();
+    bullet::SpawnOptions o;
+    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.startAtRest = true;
+    bullet::Ragdoll& r = scene.spawn(asset, o);
+    const std::vector<figure::Transform> before = r.bodyTransforms();
+    for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
+    REQUIRE(r.sunk());
+    const std::vector<figure::Transform> after = r.bodyTransforms();
+    for (std::size_t i = 0; i < before.size(); ++i) CHECK(after[i].position == before[i].position);
+    const int body = r.rigidBodyCount() / 2;
+    CHECK(r.applyImpulse(loaded.figure.bodies[static_cast<std::size_t>(body)].joint,
+                         btVector3(btScalar(r.impulseThresholdNs() * 4), 0, 0),
+                         r.body(body).getCenterOfMassPosition()));
+    CHECK_FALSE(r.sunk());
+    CHECK_FALSE(r.frozen());
+    CHECK(scene.world().getNumCollisionObjects() == objectsBefore + r.rigidBodyCount());
+    CHECK(scene.world().getNumConstraints() == constraintsBefore + r.bulletConstraintCount());
+    for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
+    // A second one, sunk, then destroyed: nothing of it stays in the world.
+    const int objectsWithFirst = scene.world().getNumCollisionObjects();
+    bullet::SpawnOptions o2 = o;
+    o2.entityTransform.getOrigin() += btVector3(5, 0, 0);
+    auto second = std::make_unique<bullet::Ragdoll>(asset, scene.ragdollWorld(), o2);
+    for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
+    REQUIRE(second->sunk());
+    CHECK(scene.world().getNumCollisionObjects() == objectsWithFirst + 1);
+    second.reset();
+    CHECK(scene.world().getNumCollisionObjects() == objectsWithFirst);
+    for (int s = 0; s < 10; ++s) scene.step(1.0 / 60);
+}

@@ -218,6 +218,14 @@ class Ragdoll {
     /// objects, so it costs the world (almost) nothing per step. A contact with an active body (the RagdollWorld
     /// checks every substep), an impulse above the threshold, setBodyStates or wake() restore it exactly.
     bool frozen() const { return m_frozen; }
+    /// True while a frozen ragdoll with nothing active near it is out of the world: its bodies are replaced by one
+    /// static, contact-free box round them (Bullet's per-object loops then see one object, not one per body). An
+    /// active object's bounding box meeting the box puts the bodies back, frozen, where frozen()'s contact rule
+    /// decides; the RagdollWorld sinks it again when nothing active is near.
+    bool sunk() const { return m_restProxy != nullptr; }
+    /// Brings a sunk ragdoll's bodies back into the world, still frozen (for a game about to ray-test it; see
+    /// RagdollWorld::setSinking). No-op when not sunk.
+    void surface();
     /// The deepest contact of the ragdoll's bodies at the moment it froze (penetration in metres, 0 for none, and
     /// the two objects): a frozen ragdoll has no contacts in the world, but it still rests that deep.
     struct FrozenContact {
@@ -252,6 +260,9 @@ class Ragdoll {
     void filterPairs();
     void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
+    friend class RagdollWorld;
+    void sink(); ///< frozen → out of the world behind one box (sunk())
+
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
     bool merged() const { return m_layout->rigids.size() != m_layout->rigidOf.size(); }
@@ -273,6 +284,9 @@ class Ragdoll {
     std::vector<int> m_masks;              ///< collision mask of each rigid body
     bool m_frozen = false;                 ///< see frozen()
     FrozenContact m_frozenContact;
+    std::unique_ptr<btBoxShape> m_restProxyShape;   ///< see sunk()
+    std::unique_ptr<btCollisionObject> m_restProxy; ///< see sunk()
+    int m_calmSubsteps = 0; ///< frozen, not sunk: substeps in a row with nothing active near (RagdollWorld)
     std::vector<btTypedConstraint*> m_main;
     std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
     std::vector<std::pair<btTransform, btTransform>> m_rigidFrames; ///< see rigidFramesLocal

@@ -55,6 +55,15 @@ class RagdollWorld {
     /// Whether the engine's contact friction is in force (another contact callback may own Bullet's hook).
     bool engineContactFriction() const { return m_friction.active(); }
 
+    /// Sinking (off by default; sim::Scene turns it on): a frozen ragdoll with no active object near it for half a
+    /// second leaves the world behind one static, contact-free box (Ragdoll::sunk), so 1000 resting ragdolls are
+    /// 1000 objects in Bullet's per-step loops, not 15,000. Its bodies come back (frozen) when an active object's
+    /// bounding box meets the box, and on an impulse, setBodyStates or wake(). While sunk, the world's queries
+    /// (ray tests, contact tests) see the box, whose user pointer is the Ragdoll, not its bodies: a game that
+    /// ray-tests resting ragdolls calls Ragdoll::surface() on a hit box first, or leaves sinking off.
+    void setSinking(bool on) { m_sinking = on; }
+    bool sinking() const { return m_sinking; }
+
     /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
     void attach(Ragdoll& ragdoll);
     void detach(Ragdoll& ragdoll);
@@ -71,6 +80,7 @@ class RagdollWorld {
     Method m_method;
     EngineContactFriction m_friction;
     std::vector<Ragdoll*> m_ragdolls; ///< in spawn order
+    bool m_sinking = false;           ///< see setSinking
     /// A ragdoll body: which ragdoll owns it and its bounding radius (for the speculative reach), fixed at spawn.
     struct BodyOwner {
         const btCollisionObject* body;
