@@ -458,3 +458,86 @@ TEST_CASE("both backends: joint friction takes the same share of a swinging hing
         previousRb = rb;
     }
 }
+
+TEST_CASE("both backends: a spring settles where k·ΔL² = m·g; its length rows hold", "[bullet][multibody]") {
+    // §4.7's force is quadratic: F = k·(L − rest)², so the arm (16 kg) hanging from the top by a spring alone
+    // (anchors at its centre of mass and 10 units straight above it: no torque) settles at ΔL = √(m·g/k). For
+    // the multibody backend the two bodies are two trees (a spring is not a tree edge): the row spans both. One air
+    // friction for the figure (the multibody backend damps a figure with one factor, README), 0.1 per step, so
+    // the swing has settled in 5 s.
+    auto springFigure = [](const std::string& extra) {
+        const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                          {"top", 0, 0, 0, 104},
+                                                          {"arm", 1, 0, 0, 100}};
+        const auto built = afb::test::buildTestFigure(
+            "articulatedFigure t {\n settings { selfCollision 0 friction 0.1, 0.1, 0.5 }\n"
+            " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density "
+            "0.1 "
+            "}\n"
+            " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 "
+            "}\n"
+            " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n"
+            " spring \"s\" { body1 \"arm\" body2 \"top\" anchor1 ( 10, 0, 100 ) anchor2 ( 10, 0, 110 ) stretch 120 "
+            "compress 120 damping 0 restLength 10 " +
+                extra + " }\n}\n",
+            joints);
+        INFO(built.diagnostics.str());
+        REQUIRE(built.figure);
+        return *built.figure;
+    };
+    // The spring's length after `seconds`, m, and the longest it was.
+    auto hang = [](const Figure& f, const Method& method, double seconds) {
+        afb::sim::Scene scene(method, {.gravityMps2 = 9.81, .ground = false});
+        Ragdoll& r = scene.spawn(RagdollAsset::create(f), {.comeToRest = false});
+        double longest = 0;
+        const int steps = static_cast<int>(std::lround(seconds * 60));
+        for (int i = 0; i < steps; ++i) {
+            scene.step(1.0 / 60.0);
+            const auto [a1, a2] = r.constraintFramesWorld(1);
+            longest = std::max(longest, static_cast<double>((a2.getOrigin() - a1.getOrigin()).length()));
+        }
+        const auto [a1, a2] = r.constraintFramesWorld(1);
+        return std::make_pair(static_cast<double>((a2.getOrigin() - a1.getOrigin()).length()), longest);
+    };
+    const double unit = afb::figure::UnitSystem{}.metresPerUnit;
+    for (const Method& method : {rigid(), multibody()}) {
+        DYNAMIC_SECTION(afb::bullet::toString(method.backend)) {
+            SECTION("equilibrium") {
+                const Figure f = springFigure("");
+                const double mass = f.bodies[1].massKg;
+                const double k = 120.0 / unit; // N/m²
+                const double expected = 10 * unit + std::sqrt(mass * 9.81 / k);
+                const double length = hang(f, method, 5.0).first;
+                INFO("length " << length << " m, expected " << expected << " m");
+                CHECK(mass == Approx(16.0));
+                CHECK(length == Approx(expected).epsilon(0.005));
+            }
+            SECTION("maxLength row") {
+                // Free, the spring would settle at 10 + 7.2 units; the row holds it at 12 (its first stretch, at
+                // about 0.7 m/s, overshoots by 11 mm on both backends).
+                const auto [length, longest] = hang(springFigure("minLength 0 maxLength 12"), method, 3.0);
+                INFO("length " << length << " m, longest " << longest << " m");
+                CHECK(length < 12 * unit + 0.002);
+                CHECK(length > 11 * unit);
+                CHECK(longest < 12 * unit + 0.015);
+            }
+            SECTION("compressed, and the minLength row") {
+                // The top's anchor 10 units below the arm's centre of mass: the arm rests on the spring, which
+                // compresses to 10 − 7.2 units; with minLength 6 the row holds it there.
+                auto below = [&](const std::string& extra) {
+                    Figure f = springFigure(extra);
+                    f.constraints[1].frameInBody2.position.z() -= 20 * unit;
+                    return f;
+                };
+                const double mass = 16.0, k = 120.0 / unit;
+                const double free = hang(below(""), method, 5.0).first;
+                INFO("compressed to " << free << " m");
+                CHECK(free == Approx(10 * unit - std::sqrt(mass * 9.81 / k)).epsilon(0.01));
+                const double held = hang(below("minLength 6 maxLength 0"), method, 3.0).first;
+                INFO("held at " << held << " m");
+                CHECK(held > 6 * unit - 0.002);
+                CHECK(held < 7 * unit);
+            }
+        }
+    }
+}
