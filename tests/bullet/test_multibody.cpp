@@ -390,8 +390,10 @@ TEST_CASE("multibody: the zsec sets dropped from 10 m and 100 m never explode", 
 namespace {
 
 // A hinge pendulum without air friction (settings friction 0, 0, 0.8): `top` fixed to the world, `arm` (a 20-unit
-// box along +X from the anchor, 16 kg) swinging about Y from horizontal; the hinge's friction is `friction`.
-Figure frictionPendulum(const std::string& friction) {
+// box along +X from the anchor, 16 kg) swinging about Y from horizontal; the hinge's friction is `friction`. With
+// `worldBall`, the arm hangs from the world by a ball-and-socket joint instead (for the multibody backend a loop
+// joint: a point-to-point constraint, its reaction its applied impulse); it swings in the same plane.
+Figure frictionPendulum(const std::string& friction, bool worldBall = false) {
     const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
                                                       {"top", 0, 0, 0, 104},
                                                       {"arm", 1, 0, 0, 100}};
@@ -399,8 +401,11 @@ Figure frictionPendulum(const std::string& friction) {
         "articulatedFigure t {\n settings { selfCollision 0 friction 0, 0, 0.8 }\n"
         " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
         " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 }\n"
-        " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n"
-        " hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) axis ( 0, 1, 0 ) friction " +
+        " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n" +
+            std::string(
+                worldBall
+                    ? " ballAndSocketJoint \"b\" { body1 \"arm\" body2 \"world\" anchor ( 0, 0, 100 ) friction "
+                    : " hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) axis ( 0, 1, 0 ) friction ") +
             friction + " }\n}\n",
         joints);
     INFO(built.diagnostics.str());
@@ -539,5 +544,21 @@ TEST_CASE("both backends: a spring settles where k·ΔL² = m·g; its length row
                 CHECK(held < 7 * unit);
             }
         }
+    }
+}
+
+TEST_CASE("both backends: joint friction on a joint to the world (a multibody loop joint)", "[bullet][multibody]") {
+    // As the hinge above, with the arm hanging from the world by a ball-and-socket joint: for the multibody backend
+    // the joint is a btMultiBodyPoint2Point (not a tree edge) and the friction's bound comes from its impulse.
+    const Swing mb0 = swing(frictionPendulum("0", true), multibody(), 2.0);
+    const Swing rb0 = swing(frictionPendulum("0", true), rigid(), 2.0);
+    for (const char* friction : {"0.2", "0.5"}) {
+        const Figure f = frictionPendulum(friction, true);
+        const double mb = swing(f, multibody(), 2.0).endJ / mb0.endJ;
+        const double rb = swing(f, rigid(), 2.0).endJ / rb0.endJ;
+        INFO("friction " << friction << ": kept multibody " << mb << ", rigid " << rb << " (without: multibody "
+                         << mb0.endJ << " J, rigid " << rb0.endJ << " J of " << mb0.startJ << ")");
+        CHECK(mb < 0.9);
+        CHECK(std::abs(mb - rb) < 0.06);
     }
 }
