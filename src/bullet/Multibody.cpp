@@ -341,8 +341,8 @@ class JointFriction : public btMultiBodyConstraint {
         : btMultiBodyConstraint(tree, nullptr, linkA, linkB ? *linkB : linkA, count, false, MULTIBODY_CONSTRAINT_LIMIT),
           m_bodyAObject(bodyA), m_bodyBObject(bodyB), m_linkBOpt(linkB), m_axesInB(axesInB), m_count(count) {}
 
+    /// The bound of each row for the coming step, N·m·s.
     void setMaxImpulse(btScalar impulse) { m_maxImpulse = impulse; }
-    btScalar maxImpulse() const { return m_maxImpulse; }
 
     void finalizeMultiDof() override {
         allocateJacobiansMultiDof();
@@ -409,9 +409,6 @@ class MultibodySpring : public btMultiBodyConstraint {
     int getIslandIdA() const override { return m_a.body->getIslandTag(); }
     int getIslandIdB() const override { return (m_b.body ? m_b.body : m_a.body)->getIslandTag(); }
     void debugDraw(btIDebugDraw*) override {}
-
-    /// The anchors' separation now, m.
-    btScalar length() const { return (pointB() - pointA()).length(); }
 
     void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
                               const btContactSolverInfo& info) override {
