@@ -313,6 +313,177 @@ class EnergyGuard : public btMultiBodyConstraint {
     std::vector<btScalar> m_delta;
 };
 
+// The Jacobian over a whole tree of a row about `axisWorld` (angular) or along `normalWorld` at two points (linear):
+// the rate of body A's motion minus body B's (B the world when `linkB` is absent). Rows within one tree take both
+// sides in one piece (Bullet's two half-Jacobians of one tree lose the cross terms).
+void relativeJacobian(btMultiBody& tree, int linkA, const btVector3& pointA, std::optional<int> linkB,
+                      const btVector3& pointB, const btVector3& axisWorld, const btVector3& normalWorld,
+                      std::vector<btScalar>& jac, std::vector<btScalar>& scratch, btAlignedObjectArray<btScalar>& r,
+                      btAlignedObjectArray<btVector3>& v, btAlignedObjectArray<btMatrix3x3>& m) {
+    const std::size_t ndof = static_cast<std::size_t>(tree.getNumDofs() + 6);
+    jac.resize(ndof);
+    scratch.resize(ndof);
+    tree.fillConstraintJacobianMultiDof(linkA, pointA, axisWorld, normalWorld, jac.data(), r, v, m);
+    if (!linkB) return;
+    tree.fillConstraintJacobianMultiDof(*linkB, pointB, axisWorld, normalWorld, scratch.data(), r, v, m);
+    for (std::size_t k = 0; k < ndof; ++k) jac[k] -= scratch[k];
+}
+
+// Joint friction (af-format §4.8) on a joint within one tree: rows resisting the relative angular velocity of the
+// two bodies about the free axes (ball 3, universal 2 perpendicular to shaft 1, hinge 1), target velocity 0, each
+// impulse bounded by `maxImpulse` per step (MultibodyRagdoll sets it from the joint's reaction force as the rigid
+// backend's JointFrictionConstraint).
+class JointFriction : public btMultiBodyConstraint {
+  public:
+    /// `axesInB`: the rows' axes as columns, fixed in body B's frame (world for a world joint); `count` used.
+    JointFriction(btMultiBody* tree, int linkA, const btCollisionObject& bodyA, std::optional<int> linkB,
+                  const btCollisionObject* bodyB, const btMatrix3x3& axesInB, int count)
+        : btMultiBodyConstraint(tree, nullptr, linkA, linkB ? *linkB : linkA, count, false, MULTIBODY_CONSTRAINT_LIMIT),
+          m_bodyAObject(bodyA), m_bodyBObject(bodyB), m_linkBOpt(linkB), m_axesInB(axesInB), m_count(count) {}
+
+    /// The bound of each row for the coming step, N·m·s.
+    void setMaxImpulse(btScalar impulse) { m_maxImpulse = impulse; }
+
+    void finalizeMultiDof() override {
+        allocateJacobiansMultiDof();
+        m_numDofsFinalized = m_jacSizeBoth;
+    }
+    int getIslandIdA() const override { return m_bodyAObject.getIslandTag(); }
+    int getIslandIdB() const override { return m_bodyAObject.getIslandTag(); }
+    void debugDraw(btIDebugDraw*) override {}
+
+    void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
+                              const btContactSolverInfo& info) override {
+        if (!(m_maxImpulse > 0)) return;
+        if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
+        const btMatrix3x3 rotB =
+            m_bodyBObject ? m_bodyBObject->getWorldTransform().getBasis() : btMatrix3x3::getIdentity();
+        const btVector3 zero(0, 0, 0);
+        const btVector3 point = m_bodyAObject.getWorldTransform().getOrigin();
+        for (int i = 0; i < m_count; ++i) {
+            const btVector3 axis = rotB * m_axesInB.getColumn(i);
+            relativeJacobian(*m_bodyA, m_linkA, point, m_linkBOpt, point, axis, zero, m_jac, m_scratch, data.scratch_r,
+                             data.scratch_v, data.scratch_m);
+            btMultiBodySolverConstraint& row = rows.expandNonInitializing();
+            row.m_solverBodyIdA = data.m_fixedBodyId;
+            row.m_solverBodyIdB = data.m_fixedBodyId;
+            fillMultiBodyConstraint(row, data, m_jac.data(), nullptr, axis, zero, point, point, 0, info, -m_maxImpulse,
+                                    m_maxImpulse, true, 1, false, 0, 0, 1);
+            row.m_orgConstraint = this;
+            row.m_orgDofIndex = i;
+        }
+    }
+
+  private:
+    const btCollisionObject& m_bodyAObject;
+    const btCollisionObject* m_bodyBObject; ///< nullptr: the world
+    std::optional<int> m_linkBOpt;          ///< absent: the world
+    btMatrix3x3 m_axesInB;
+    int m_count;
+    btScalar m_maxImpulse = 0;
+    std::vector<btScalar> m_jac, m_scratch;
+};
+
+// A spring (af-format §4.7) between anchors fixed in two bodies (of one tree, of two trees, or one body and the
+// world): the rigid backend's SpringConstraint law (the quadratic force minus the damping term, each step's
+// impulse bounded by what closes the whole deviation or stops the relative motion in that step) as a row whose
+// impulse is pinned to F·dt, so it is integrated inside the solver step where gravity is; plus the one-sided
+// min/max length rows with the world's joint ERP.
+class MultibodySpring : public btMultiBodyConstraint {
+  public:
+    struct End {
+        btMultiBody* tree = nullptr; ///< nullptr: the world
+        int link = -1;
+        const btCollisionObject* body = nullptr; ///< nullptr: the world
+        btVector3 anchor{0, 0, 0};               ///< in the body's frame (world for the world)
+    };
+    MultibodySpring(const End& a, const End& b, const SpringConstraint::Params& params)
+        : btMultiBodyConstraint(a.tree, b.tree && b.tree != a.tree ? b.tree : nullptr, a.link, b.tree ? b.link : a.link,
+                                2, false, MULTIBODY_CONSTRAINT_LIMIT),
+          m_a(a), m_b(b), m_params(params) {}
+
+    void finalizeMultiDof() override {
+        allocateJacobiansMultiDof();
+        m_numDofsFinalized = m_jacSizeBoth;
+    }
+    int getIslandIdA() const override { return m_a.body->getIslandTag(); }
+    int getIslandIdB() const override { return (m_b.body ? m_b.body : m_a.body)->getIslandTag(); }
+    void debugDraw(btIDebugDraw*) override {}
+
+    void createConstraintRows(btMultiBodyConstraintArray& rows, btMultiBodyJacobianData& data,
+                              const btContactSolverInfo& info) override {
+        if (m_numDofsFinalized != m_jacSizeBoth) finalizeMultiDof();
+        const btVector3 pa = pointA(), pb = pointB();
+        const btVector3 d = pb - pa;
+        const btScalar length = d.length();
+        if (!(length > SIMD_EPSILON)) return;
+        const btVector3 n = d / length;
+        const btScalar dt = info.m_timeStep;
+        // A row along n whose velocity is n·(v_A − v_B) = −dL/dt: a positive impulse pulls the anchors together.
+        auto addRow = [&](btScalar posError, btScalar lo, btScalar hi, int index) -> btMultiBodySolverConstraint& {
+            const btVector3 zero(0, 0, 0);
+            const bool oneTree = m_bodyB == nullptr;
+            relativeJacobian(*m_bodyA, m_linkA, pa, oneTree && m_b.tree ? std::optional<int>(m_linkB) : std::nullopt,
+                             pb, zero, n, m_jacA, m_scratch, data.scratch_r, data.scratch_v, data.scratch_m);
+            if (!oneTree) {
+                relativeJacobian(*m_bodyB, m_linkB, pb, std::nullopt, pb, zero, -n, m_jacB, m_scratch, data.scratch_r,
+                                 data.scratch_v, data.scratch_m);
+            }
+            btMultiBodySolverConstraint& row = rows.expandNonInitializing();
+            row.m_solverBodyIdA = data.m_fixedBodyId;
+            row.m_solverBodyIdB = data.m_fixedBodyId;
+            fillMultiBodyConstraint(row, data, m_jacA.data(), oneTree ? nullptr : m_jacB.data(), zero, n, pa, pb,
+                                    posError, info, lo, hi, false, 1, false, 0, 0, 1);
+            row.m_orgConstraint = this;
+            row.m_orgDofIndex = index;
+            return row;
+        };
+        // The force: the engine's terms from the anchors' relative speed along n (the row's velocity), each
+        // bounded through the row's effective mass (SpringConstraint::impulse).
+        const btScalar rest = m_params.restLength;
+        const btScalar k = length > rest ? m_params.stretch : m_params.compress;
+        if (k > 0) {
+            btMultiBodySolverConstraint& row = addRow(0, 0, 0, 0);
+            const btScalar speed = btFabs(rowVelocity());
+            const btScalar sign = length > rest ? 1 : -1;
+            const btScalar deviation = btFabs(length - rest);
+            btScalar spring = k * deviation * deviation * dt;
+            btScalar damping = m_params.damping * speed / length * dt;
+            const btScalar mass = row.m_jacDiagABInv; // 1 / (J·M⁻¹·Jᵀ); 0 for a row nothing can move
+            if (mass > 0) {
+                spring = btMin(spring, mass * deviation / dt);
+                damping = btMin(damping, mass * speed);
+            }
+            const btScalar pull = sign * (spring - damping);
+            row.m_rhs = 0;
+            row.m_lowerLimit = pull;
+            row.m_upperLimit = pull;
+        }
+        if (length < m_params.minLength) addRow(m_params.minLength - length, -SIMD_INFINITY, 0, 1);
+        else if (m_params.maxLength > 0 && length > m_params.maxLength)
+            addRow(m_params.maxLength - length, 0, SIMD_INFINITY, 1);
+    }
+
+  private:
+    btVector3 pointA() const { return m_a.body->getWorldTransform() * m_a.anchor; }
+    btVector3 pointB() const { return m_b.body ? m_b.body->getWorldTransform() * m_b.anchor : m_b.anchor; }
+    // J·q̇ of a filled row (its velocity now).
+    btScalar rowVelocity() const {
+        btScalar v = 0;
+        const btScalar* q = m_bodyA->getVelocityVector();
+        for (std::size_t i = 0; i < m_jacA.size(); ++i) v += m_jacA[i] * q[i];
+        if (m_bodyB) {
+            const btScalar* qb = m_bodyB->getVelocityVector();
+            for (std::size_t i = 0; i < m_jacB.size(); ++i) v += m_jacB[i] * qb[i];
+        }
+        return v;
+    }
+
+    End m_a, m_b;
+    SpringConstraint::Params m_params;
+    std::vector<btScalar> m_jacA, m_jacB, m_scratch;
+};
+
 } // namespace
 
 // A link's collider with the figure's §6.2 rules between the ragdoll's own bodies (Bullet's own rule knows only
@@ -368,6 +539,7 @@ class MultibodyRagdoll::Action : public btActionInterface {
             return;
         }
         activeTime += dt;
+        m_owner.updateFrictionBounds(dt);
         m_owner.dampVelocities(dt);
         m_owner.correctPositions();
         const std::vector<BodySample> samples = m_owner.samples();
@@ -406,6 +578,7 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
     const figure::Figure& f = m_asset->figure();
     m_colliding = figure::selfCollisionPairs(f);
     m_angularVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
+    m_linearVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
     // Damping: the rigid backend scales each body's velocities by (1 − d)^dt per step (btRigidBody's model). In
     // reduced coordinates the same factor on every generalised velocity scales every body's linear and angular
     // velocity alike: exact when the figure has one damping (every bundled and corpus figure: the §3.4 friction
@@ -602,7 +775,10 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
         const btTransform fa = toBt(c.frameInBody1);
         const btTransform fb = c.body2 >= 0 ? toBt(c.frameInBody2) : m_spawn * toBt(c.frameInBody2);
         m_frames.emplace_back(fa, fb);
-        if (c.type == JointType::Spring) continue; // not modelled yet (README: the multibody backend)
+        if (c.type == JointType::Spring) {
+            addSpring(c, fa, fb);
+            continue;
+        }
         const BodyRef a = m_bodies[static_cast<std::size_t>(c.body1)];
         btMultiBody* treeA = m_parts[static_cast<std::size_t>(a.part)].body.get();
         const bool sameTree = c.body2 < 0 || m_bodies[static_cast<std::size_t>(c.body2)].part == a.part;
@@ -631,9 +807,12 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
             }
             joint->setMaxAppliedImpulse(BT_LARGE_FLOAT); // Bullet's default caps it at 100 N·s
             m_world.addMultiBodyConstraint(joint.get());
+            if (sameTree) addFriction(static_cast<int>(ci), joint.get());
             m_constraints.push_back(std::move(joint));
+        } else {
+            addFriction(static_cast<int>(ci), nullptr);
         }
-        if (!sameTree) continue; // a limit across two trees: not modelled (no corpus figure has one)
+        if (!sameTree) continue; // a limit or friction across two trees: not modelled (no corpus figure has one)
         // Limits: the rigid backend's rows (Ragdoll::addConstraints), on the links.
         const btMatrix3x3 b2Rot = c.body2 >= 0 ? btMatrix3x3::getIdentity() : m_spawn.getBasis();
         std::optional<MultibodyLimit::Kind> limit;
@@ -683,6 +862,133 @@ void MultibodyRagdoll::addConstraints(const Method& method) {
         m_constraints.push_back(std::move(guard));
     }
     recordMotion();
+}
+
+void MultibodyRagdoll::addFriction(int ci, btMultiBodyConstraint* loop) {
+    const figure::Figure& f = m_asset->figure();
+    const FigureConstraint& c = f.constraints[static_cast<std::size_t>(ci)];
+    if (!(c.friction > 0)) return;
+    // The rows' axes in body 2's frame (world for a world joint), as the rigid backend's (Ragdoll::addConstraints).
+    const btMatrix3x3 frame = m_frames[static_cast<std::size_t>(ci)].second.getBasis();
+    btMatrix3x3 axes = btMatrix3x3::getIdentity();
+    int count = 0;
+    switch (c.type) {
+    case JointType::BallAndSocket: count = 3; break;
+    case JointType::Universal: // the two directions perpendicular to shaft 1 (the frame's X)
+        count = 2;
+        axes.setValue(frame[0][1], frame[0][2], 0, frame[1][1], frame[1][2], 0, frame[2][1], frame[2][2], 0);
+        break;
+    case JointType::Hinge: // the hinge axis (the frame's Z)
+        count = 1;
+        axes.setValue(frame[0][2], 0, 0, frame[1][2], 0, 0, frame[2][2], 0, 0);
+        break;
+    default: return; // fixed and slider joints have no friction (§4.6), springs none (§4.7)
+    }
+    const BodyRef a = m_bodies[static_cast<std::size_t>(c.body1)];
+    btMultiBody& tree = *m_parts[static_cast<std::size_t>(a.part)].body;
+    Friction fr;
+    fr.coefficientTimesLever = static_cast<btScalar>(c.friction * f.units.metresPerUnit);
+    fr.loop = loop;
+    if (!loop) {
+        // A tree joint: its reaction is what the child's subtree needs beyond gravity and its contacts.
+        const std::vector<Joint>& joints = m_parts[static_cast<std::size_t>(a.part)].joints;
+        int child = -1;
+        for (const Joint& j : joints)
+            if ((j.child == c.body1 && j.parent == c.body2) || (j.child == c.body2 && j.parent == c.body1))
+                child = j.child;
+        if (child < 0) return;
+        for (int b = 0; b < bodyCount(); ++b) {
+            if (m_bodies[static_cast<std::size_t>(b)].part != a.part) continue;
+            int up = b;
+            while (up >= 0 && up != child) {
+                const auto it =
+                    std::find_if(joints.begin(), joints.end(), [&](const Joint& j) { return j.child == up; });
+                up = it == joints.end() ? -1 : it->parent;
+            }
+            if (up == child) fr.subtree.push_back(b);
+        }
+    }
+    std::optional<int> linkB;
+    const btCollisionObject* bodyB = nullptr;
+    if (c.body2 >= 0) {
+        linkB = m_bodies[static_cast<std::size_t>(c.body2)].link;
+        bodyB = m_colliders[static_cast<std::size_t>(c.body2)].get();
+    }
+    auto rows = std::make_unique<JointFriction>(&tree, a.link, *m_colliders[static_cast<std::size_t>(c.body1)], linkB,
+                                                bodyB, axes, count);
+    fr.rows = rows.get();
+    m_world.addMultiBodyConstraint(rows.get());
+    m_frictions.push_back(fr);
+    m_constraints.push_back(std::move(rows));
+}
+
+void MultibodyRagdoll::addSpring(const FigureConstraint& c, const btTransform& fa, const btTransform& fb) {
+    SpringConstraint::Params p;
+    p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
+    p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
+    p.damping = static_cast<btScalar>(c.spring.dampingNs);
+    p.restLength = static_cast<btScalar>(c.spring.restLengthM);
+    p.minLength = static_cast<btScalar>(c.spring.minLengthM);
+    p.maxLength = static_cast<btScalar>(c.spring.maxLengthM);
+    auto end = [&](int body, const btVector3& anchor) {
+        MultibodySpring::End e;
+        e.anchor = anchor;
+        if (body < 0) return e;
+        const BodyRef ref = m_bodies[static_cast<std::size_t>(body)];
+        e.tree = m_parts[static_cast<std::size_t>(ref.part)].body.get();
+        e.link = ref.link;
+        e.body = m_colliders[static_cast<std::size_t>(body)].get();
+        return e;
+    };
+    auto spring = std::make_unique<MultibodySpring>(end(c.body1, fa.getOrigin()), end(c.body2, fb.getOrigin()), p);
+    m_world.addMultiBodyConstraint(spring.get());
+    m_constraints.push_back(std::move(spring));
+}
+
+void MultibodyRagdoll::updateFrictionBounds(btScalar dt) {
+    if (m_frictions.empty() || !(dt > 0)) return;
+    // §4.8 as the rigid backend: each row's bound is friction × the joint's reaction force in the step just
+    // solved, in SI (× metres per unit), times the step. A tree joint has no constraint force of its own: its
+    // reaction is the force the child's subtree needed beyond gravity and its contacts, Σ(m·Δv − m·g·dt − p)/dt
+    // (Bullet's joint feedback counts the velocity-product terms twice: 4·m·g at the bottom of a rod's swing for
+    // the exact 2.5·m·g). A loop or world joint's reaction is its constraint's applied impulse.
+    const std::vector<BodySample> now = samples();
+    m_contactImpulse.assign(m_bodies.size(), btVector3(0, 0, 0));
+    btDispatcher& dispatcher = *m_world.getDispatcher();
+    for (int i = 0, n = dispatcher.getNumManifolds(); i < n; ++i) {
+        const btPersistentManifold* m = dispatcher.getManifoldByIndexInternal(i);
+        if (m->getNumContacts() == 0) continue;
+        const int a = LinkCollider::bodyOf(m->getBody0(), *this), b = LinkCollider::bodyOf(m->getBody1(), *this);
+        if (a < 0 && b < 0) continue;
+        for (int k = 0; k < m->getNumContacts(); ++k) {
+            const btManifoldPoint& cp = m->getContactPoint(k);
+            // On body 0 (A): along the normal from B towards A, and the two friction directions.
+            const btVector3 p = cp.m_normalWorldOnB * cp.m_appliedImpulse +
+                                cp.m_lateralFrictionDir1 * cp.m_appliedImpulseLateral1 +
+                                cp.m_lateralFrictionDir2 * cp.m_appliedImpulseLateral2;
+            if (a >= 0) m_contactImpulse[static_cast<std::size_t>(a)] += p;
+            if (b >= 0) m_contactImpulse[static_cast<std::size_t>(b)] -= p;
+        }
+    }
+    const btVector3 g = m_world.getGravity();
+    const figure::Figure& f = m_asset->figure();
+    for (const Friction& fr : m_frictions) {
+        btScalar force = 0;
+        if (fr.loop) {
+            btVector3 impulse(0, 0, 0);
+            for (int i = 0; i < std::min(3, fr.loop->getNumRows()); ++i) impulse[i] = fr.loop->getAppliedImpulse(i);
+            force = impulse.length() / dt;
+        } else {
+            btVector3 impulse(0, 0, 0);
+            for (const int b : fr.subtree) {
+                const std::size_t k = static_cast<std::size_t>(b);
+                const btScalar m = static_cast<btScalar>(f.bodies[k].massKg);
+                impulse += (now[k].linearVelocity - m_linearVelocity[k]) * m - g * (m * dt) - m_contactImpulse[k];
+            }
+            force = impulse.length() / dt;
+        }
+        static_cast<JointFriction*>(fr.rows)->setMaxImpulse(fr.coefficientTimesLever * force * dt);
+    }
 }
 
 void MultibodyRagdoll::correctPositions() {
@@ -766,7 +1072,9 @@ bool MultibodyRagdoll::correctContact(const SweepContact& c, const btManifoldPoi
 }
 
 void MultibodyRagdoll::publishVelocities(std::span<const BodySample> samples) {
+    m_linearVelocity.resize(samples.size());
     for (std::size_t i = 0; i < samples.size(); ++i) {
+        m_linearVelocity[i] = samples[i].linearVelocity;
         m_colliders[i]->setInterpolationLinearVelocity(samples[i].linearVelocity);
         m_colliders[i]->setInterpolationAngularVelocity(samples[i].angularVelocity);
     }

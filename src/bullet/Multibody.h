@@ -103,6 +103,13 @@ class MultibodyRagdoll {
     void build(const SpawnOptions& options);
     void addColliders(const SpawnOptions& options);
     void addConstraints(const Method& method);
+    /// §4.8 joint friction rows on figure constraint `ci` if it has friction (`loop`: its constraint when it is
+    /// not a tree edge, whose applied impulses are the reaction; else the reaction of the child's subtree).
+    void addFriction(int ci, btMultiBodyConstraint* loop);
+    /// §4.7: the spring between the two bodies' anchors (frames' origins, body frames; world for the world).
+    void addSpring(const figure::FigureConstraint& c, const btTransform& fa, const btTransform& fb);
+    /// Each friction row's bound for the coming step from its joint's reaction in the step just solved.
+    void updateFrictionBounds(btScalar dt);
     void refreshTransforms(btMultiBody& body);
     void dampVelocities(btScalar dt);
     /// A contact of the ragdoll's bodies for the position sweeps: the figure bodies on each side (−1: not ours).
@@ -142,6 +149,16 @@ class MultibodyRagdoll {
     int m_positionIterations = 0;                 ///< sweeps of correctPositions
     std::vector<SweepContact> m_sweepContacts;    ///< this substep's, for correctPositions
     std::vector<btScalar> m_sweepJac, m_sweepJacB, m_sweepMove;
+    /// A joint's friction rows and where its reaction force is read.
+    struct Friction {
+        btMultiBodyConstraint* rows = nullptr; ///< a JointFriction (owned by m_constraints)
+        std::vector<int> subtree;              ///< a tree joint: the figure bodies its child carries
+        btMultiBodyConstraint* loop = nullptr; ///< a loop or world joint's constraint
+        btScalar coefficientTimesLever = 0;    ///< friction × metres per unit (§4.8 in SI)
+    };
+    std::vector<Friction> m_frictions;
+    std::vector<btVector3> m_linearVelocity; ///< per figure body, as last published (joint reactions)
+    std::vector<btVector3> m_contactImpulse; ///< per figure body, this substep's (joint reactions)
     std::unique_ptr<Action> m_action;
 };
 
