@@ -180,6 +180,17 @@ void JointFrictionConstraint::getInfo2(btConstraintInfo2* info) {
 
 // --- SpringConstraint -----------------------------------------------------------------------------------------
 
+SpringConstraint::Params SpringConstraint::Params::of(const figure::SpringParams& spring) {
+    Params p;
+    p.stretch = static_cast<btScalar>(spring.stretchNPerM2);
+    p.compress = static_cast<btScalar>(spring.compressNPerM2);
+    p.damping = static_cast<btScalar>(spring.dampingNs);
+    p.restLength = static_cast<btScalar>(spring.restLengthM);
+    p.minLength = static_cast<btScalar>(spring.minLengthM);
+    p.maxLength = static_cast<btScalar>(spring.maxLengthM);
+    return p;
+}
+
 SpringConstraint::SpringConstraint(btRigidBody& a, btRigidBody& b, const btVector3& anchorInA,
                                    const btVector3& anchorInB, const Params& params)
     : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_anchorA(anchorInA), m_anchorB(anchorInB), m_params(params) {}

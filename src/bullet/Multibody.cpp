@@ -923,13 +923,7 @@ void MultibodyRagdoll::addFriction(int ci, btMultiBodyConstraint* loop) {
 }
 
 void MultibodyRagdoll::addSpring(const FigureConstraint& c, const btTransform& fa, const btTransform& fb) {
-    SpringConstraint::Params p;
-    p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
-    p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
-    p.damping = static_cast<btScalar>(c.spring.dampingNs);
-    p.restLength = static_cast<btScalar>(c.spring.restLengthM);
-    p.minLength = static_cast<btScalar>(c.spring.minLengthM);
-    p.maxLength = static_cast<btScalar>(c.spring.maxLengthM);
+    const SpringConstraint::Params p = SpringConstraint::Params::of(c.spring);
     auto end = [&](int body, const btVector3& anchor) {
         MultibodySpring::End e;
         e.anchor = anchor;

@@ -172,26 +172,32 @@ bool projectLimitRow(Side& a, Side& b, const LimitRow& row) {
     return true;
 }
 
-bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body1Basis,
-                  const btMatrix3x3& body2Basis) {
-    LimitRow rows[2];
-    int n = 0;
-    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
-        n = hingeRangeRow(f.a.getBasis(), f.b.getBasis(), static_cast<btScalar>(h->lowerRad),
-                          static_cast<btScalar>(h->upperRad), 0, rows[0]);
-    } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
+// The rows of `c`'s limit past the limit (none when within it) for the two frames and the two bodies' bases.
+int violatedLimitRows(const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body1Basis,
+                      const btMatrix3x3& body2Basis, LimitRow rows[2]) {
+    if (const auto* h = std::get_if<figure::HingeRange>(&c.limit))
+        return hingeRangeRow(f.a.getBasis(), f.b.getBasis(), static_cast<btScalar>(h->lowerRad),
+                             static_cast<btScalar>(h->upperRad), 0, rows[0]);
+    if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
         btVector3 y, z;
         const btVector3 axis = (body2Basis * toBt(cone->axisInBody2)).normalized();
         btPlaneSpace1(axis, y, z);
         btMatrix3x3 basis;
         basis.setValue(axis.x(), y.x(), z.x(), axis.y(), y.y(), z.y(), axis.z(), y.z(), z.z());
-        n = directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
-                               static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
-    } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-        n = directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
-                               LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
-                               static_cast<btScalar>(p->halfAngle2Rad), 0, rows);
+        return directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
+                                  static_cast<btScalar>(cone->halfAngleRad), 0, 0, rows);
     }
+    if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
+        return directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
+                                  LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
+                                  static_cast<btScalar>(p->halfAngle2Rad), 0, rows);
+    return 0;
+}
+
+bool projectLimit(Side& a, Side& b, const figure::FigureConstraint& c, const Frames& f, const btMatrix3x3& body1Basis,
+                  const btMatrix3x3& body2Basis) {
+    LimitRow rows[2];
+    const int n = violatedLimitRows(c, f, body1Basis, body2Basis, rows);
     bool corrected = false;
     for (int i = 0; i < n; ++i) corrected = projectLimitRow(a, b, rows[i]) || corrected;
     return corrected;
@@ -485,25 +491,8 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
             }
         }
         LimitRow limit[2];
-        int n = 0;
-        const btMatrix3x3 body1Basis = a.r * r.bodyInRigid(c.body1).getBasis();
-        const btMatrix3x3 body2Basis = b.body ? b.r * r.bodyInRigid(c.body2).getBasis() : spawnBasis;
-        if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
-            n = hingeRangeRow(fr.a.getBasis(), fr.b.getBasis(), static_cast<btScalar>(h->lowerRad),
-                              static_cast<btScalar>(h->upperRad), 0, limit[0]);
-        } else if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-            btVector3 y, z;
-            const btVector3 axis = (body2Basis * toBt(cone->axisInBody2)).normalized();
-            btPlaneSpace1(axis, y, z);
-            btMatrix3x3 basis;
-            basis.setValue(axis.x(), y.x(), z.x(), axis.y(), y.y(), z.y(), axis.z(), y.z(), z.z());
-            n = directionLimitRows(body1Basis * toBt(cone->shaftInBody1), basis, LimitShape::Cone,
-                                   static_cast<btScalar>(cone->halfAngleRad), 0, 0, limit);
-        } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
-            n = directionLimitRows(body1Basis * toBt(p->shaftInBody1), body2Basis * toBt(p->basisInBody2),
-                                   LimitShape::Pyramid, static_cast<btScalar>(p->halfAngle1Rad),
-                                   static_cast<btScalar>(p->halfAngle2Rad), 0, limit);
-        }
+        const int n = violatedLimitRows(c, fr, a.r * r.bodyInRigid(c.body1).getBasis(),
+                                        b.body ? b.r * r.bodyInRigid(c.body2).getBasis() : spawnBasis, limit);
         for (int i = 0; i < n; ++i)
             if (limit[i].excess > kAngleToleranceRad && rows.angular < 5) {
                 rows.axis[rows.angular] = limit[i].axisWorld;

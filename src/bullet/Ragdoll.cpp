@@ -608,13 +608,7 @@ void Ragdoll::addConstraints() {
         }
         case JointType::Slider: main = makeSlider(a, b, fa, fb); break;
         case JointType::Spring: {
-            SpringConstraint::Params p;
-            p.stretch = static_cast<btScalar>(c.spring.stretchNPerM2);
-            p.compress = static_cast<btScalar>(c.spring.compressNPerM2);
-            p.damping = static_cast<btScalar>(c.spring.dampingNs);
-            p.restLength = static_cast<btScalar>(c.spring.restLengthM);
-            p.minLength = static_cast<btScalar>(c.spring.minLengthM);
-            p.maxLength = static_cast<btScalar>(c.spring.maxLengthM);
+            const SpringConstraint::Params p = SpringConstraint::Params::of(c.spring);
             main = std::make_unique<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
             break;
         }

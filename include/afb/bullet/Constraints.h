@@ -5,6 +5,8 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include "afb/figure/Figure.h"
+
 namespace afb::bullet {
 
 /// One row of a one-sided angular limit: the excess grows at `axisWorld · (ωA − ωB)`.
@@ -124,6 +126,8 @@ class SpringConstraint : public btTypedConstraint {
         btScalar stretch = 0, compress = 0; ///< N/m²
         btScalar damping = 0;               ///< N per m/s of relative speed along the spring, scaled as §4.7
         btScalar restLength = 0, minLength = 0, maxLength = 0; ///< m
+        /// The figure's spring (af-format §4.7) in Bullet's precision; both backends build theirs from it.
+        static Params of(const figure::SpringParams& spring);
     };
     SpringConstraint(btRigidBody& a, btRigidBody& b, const btVector3& anchorInA, const btVector3& anchorInB,
                      const Params& params);
