@@ -137,8 +137,18 @@ std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) 
             }
             btAlignedObjectArray<btVector3> vertices;
             btGeometryUtil::getVerticesFromPlaneEquations(shrunk, vertices);
+            // Every triple of planes through a vertex yields it once, so a vertex where more than three faces meet
+            // (an octahedron's, a bone's waist, a cone's apex) comes out several times. Duplicates cost every support
+            // query and crowd distinct corners out of a four-point contact manifold (a bone lying on the ground was
+            // held at one point, four times over, and rocked its far end 2.4 cm into the ground): keep one of each.
+            const btScalar same = btScalar(1e-6) * btMax(btScalar(1e-3), static_cast<btScalar>(inradius));
             auto hull = std::make_unique<btConvexHullShape>();
-            for (int i = 0; i < vertices.size(); ++i) hull->addPoint(vertices[i], false);
+            for (int i = 0; i < vertices.size(); ++i) {
+                bool seen = false;
+                for (int k = 0; k < hull->getNumPoints() && !seen; ++k)
+                    seen = (hull->getUnscaledPoints()[k] - vertices[i]).length2() <= same * same;
+                if (!seen) hull->addPoint(vertices[i], false);
+            }
             hull->recalcLocalAabb();
             hull->setMargin(static_cast<btScalar>(margin));
             asset->m_shapes.push_back(std::move(hull));

@@ -333,6 +333,49 @@ TEST_CASE("vertex contacts: a box's manifold holds the corners it rests and roll
     }
 }
 
+TEST_CASE("vertex contacts: a hull holds each corner once, so an octahedron on an edge touches at both ends",
+          "[bullet][methods]") {
+    // An octahedron's vertices each join four faces, and a hull built from the face planes finds each vertex once
+    // per triple of planes through it: four times. With the copies, the four-point manifold of a body lying on the
+    // ground could be four copies of one corner (a bone lying on the ground was held at one point and rocked its far
+    // end 2.4 cm into the ground). Turned 45° about X, the octahedron's lowest edge joins two vertices, both on the
+    // ground, and the next vertices are h·cos 45° up, beyond a 2 cm reach: the manifold holds exactly those two.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure oct {\n body \"oct\" { joint \"origin\" model "
+                                                  "octahedron( ( -8, -8, -8 ), ( 8, 8, 8 ) ) origin ( 0, 0, 8 ) "
+                                                  "density 0.02 }\n}\n",
+                                                  joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    const auto asset = RagdollAsset::create(*built.figure);
+    const auto* hull = dynamic_cast<const btConvexHullShape*>(asset->shape(0));
+    REQUIRE(hull != nullptr);
+    CHECK(hull->getNumPoints() == 6);
+    for (int i = 0; i < hull->getNumPoints(); ++i)
+        for (int k = i + 1; k < hull->getNumPoints(); ++k)
+            CHECK((hull->getUnscaledPoints()[i] - hull->getUnscaledPoints()[k]).length() > 0.01);
+
+    const double h = 8 * kUnit;
+    afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
+    auto& r = scene.spawn(asset, {.comeToRest = false});
+    const btQuaternion q(btVector3(1, 0, 0), btScalar(45 * kDeg));
+    r.body(0).setCenterOfMassTransform(btTransform(q, btVector3(0, 0, btScalar(h * std::cos(45 * kDeg)))));
+    scene.world().performDiscreteCollisionDetection();
+    btDispatcher* d = scene.world().getDispatcher();
+    REQUIRE(d->getNumManifolds() == 1);
+    d->getManifoldByIndexInternal(0)->setContactBreakingThreshold(btScalar(0.02));
+    scene.world().performDiscreteCollisionDetection();
+    const btPersistentManifold* m = d->getManifoldByIndexInternal(0);
+    REQUIRE(m->getNumContacts() == 2);
+    const btVector3 a = m->getContactPoint(0).getPositionWorldOnA(), b = m->getContactPoint(1).getPositionWorldOnA();
+    // Both ends of the edge, 2·h·sin 45° = 287 mm apart less what the margin rounds off the corners (the hull is
+    // the polytope shrunk by the margin, then grown by a ball of it), each as high as the other, just above the
+    // ground (the rounding lifts a corner by a few millimetres).
+    CHECK((a - b).length() > 2 * h * std::sin(45 * kDeg) - 0.03);
+    CHECK(std::abs(m->getContactPoint(0).getDistance() - m->getContactPoint(1).getDistance()) < 1e-5);
+    for (int i = 0; i < 2; ++i) CHECK(std::abs(m->getContactPoint(i).getDistance()) < 0.005);
+}
+
 TEST_CASE("vertex contacts: a box slapping down onto its face stops at the ground", "[bullet][methods]") {
     // The box balanced on a bottom edge at 30°, turning onto its face at 40 rad/s: its far edge comes down at
     // about ω·w = 16 m/s, 27 cm per step at 60 Hz. At 30° the corners of the side face are nearer the ground
