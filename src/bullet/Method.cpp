@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
                                                           "exact", "legacy",  "multibody"};
 
-const std::array<MethodKnob, 20> kKnobs = {{
+const std::array<MethodKnob, 21> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -39,6 +39,8 @@ const std::array<MethodKnob, 20> kKnobs = {{
     {"ccd", "Continuous collision: off or fast-bodies", &Method::ccd},
     {"joint-warm-starting", "Joint rows start from their last impulse (on/off; needs a RagdollSolver)",
      &Method::jointWarmStarting},
+    {"limit-warm-starting", "Limit rows start from their last impulse too (on/off; needs a RagdollSolver)",
+     &Method::limitWarmStarting},
     {"direct-joints",
      "Joints solved exactly per ragdoll each iteration; contacts and limits move the whole ragdoll "
      "(on/off; needs a RagdollSolver)",
@@ -97,6 +99,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.jointIterations = 20;
         m.positionIterations = 0;
         m.multipointContacts = m.speculativeContacts = m.speculativeLimits = m.jointWarmStarting = false;
+        m.limitWarmStarting = false;
         return m;
     }
     if (name == "fast") {
@@ -130,7 +133,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.backend = Backend::Multibody;
         m.jointIterations = 0;
         m.positionIterations = 4;
-        m.jointWarmStarting = false;
+        m.jointWarmStarting = m.limitWarmStarting = false;
         m.ccd = CcdPolicy::Off;
         return m;
     }

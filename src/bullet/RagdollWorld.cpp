@@ -414,15 +414,14 @@ void RagdollWorld::attach(Ragdoll& r) {
 }
 
 void RagdollWorld::trackJoints(Ragdoll& r) {
-    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
-        solver != nullptr && (r.method().jointWarmStarting || r.method().directJoints))
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
-            // Limit rows are not warm-started: a speculative row is there before the limit is reached, and the
-            // face of a pyramid it stands for can change from one step to the next with the same row count.
-            // Warm-started (in full or at half the factor), they pushed a resting humanoid's upper arm 1.7–2.4 cm
-            // into the ground, against 3 mm without (README: Methods).
-            if (r.bulletConstraintIsLimit(k)) continue;
-            solver->track(r.bulletConstraint(k), r.method().jointWarmStarting, r.method().directJoints);
+            // Limit rows by their own knob (Method::limitWarmStarting); a limit row is never part of the direct
+            // solve's block (its rows are bounded), so it is tracked only to be warm-started.
+            const bool limit = r.bulletConstraintIsLimit(k);
+            const bool warm = limit ? r.method().limitWarmStarting : r.method().jointWarmStarting;
+            const bool direct = !limit && r.method().directJoints;
+            if (warm || direct) solver->track(r.bulletConstraint(k), warm, direct);
         }
 }
 

@@ -36,6 +36,7 @@ bullet::Method rawMethod() {
     m.speculativeContacts = false;
     m.speculativeLimits = false;
     m.jointWarmStarting = false;
+    m.limitWarmStarting = false;
     return m;
 }
 
@@ -50,6 +51,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.speculativeContacts) knobs += " speculative-contacts";
     if (m.speculativeLimits) knobs += " speculative-limits";
     if (m.jointWarmStarting) knobs += " joint-warm-starting";
+    if (m.limitWarmStarting) knobs += " limit-warm-starting";
     if (knobs.empty()) return {};
     return "method raw (plain Bullet) has no" + knobs + ": leave them off";
 }

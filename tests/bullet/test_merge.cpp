@@ -215,50 +215,54 @@ TEST_CASE("merge: a merged humanoid lands and rests no deeper than the unmerged 
     bullet::Method on = *bullet::methodPreset("default"), off = on;
     on.mergeFixed = true;
     off.mergeFixed = false;
-    sim::Scene sceneOn(on), sceneOff(off);
-    bullet::SpawnOptions where;
-    where.entityTransform = btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(M_PI / 2)), btVector3(0, 0, 1));
-    bullet::Ragdoll& merged = sceneOn.spawn(asset, where);
-    (void)sceneOff.spawn(asset, where);
-    const auto& pairs = asset->contactPairs();
-    const auto rigidOf = [&](const btCollisionObject* o) {
-        for (int k = 0; k < merged.rigidBodyCount(); ++k)
-            if (&merged.rigidBody(k) == o) return k;
-        return -1;
-    };
-    // A merged body's points name their child (the manifold's index of that side).
-    const auto bodyOf = [&](int rigid, int child) {
-        const std::vector<int>& bodies = merged.layout().rigids[static_cast<std::size_t>(rigid)].bodies;
-        if (bodies.size() == 1) return bodies.front();
-        REQUIRE(child >= 0);
-        REQUIRE(child < static_cast<int>(bodies.size()));
-        return bodies[static_cast<std::size_t>(child)];
-    };
     double peakOn = 0, peakOff = 0, restOn = 0, restOff = 0;
     int selfContacts = 0, forbidden = 0;
-    const int steps = 180; // 3 s: landed and lying still for the last second
-    for (int s = 0; s < steps; ++s) {
-        sceneOn.step(1.0 / 60);
-        sceneOff.step(1.0 / 60);
-        const double depthOn = sceneOn.deepestContact().depthM, depthOff = sceneOff.deepestContact().depthM;
-        peakOn = std::max(peakOn, depthOn);
-        peakOff = std::max(peakOff, depthOff);
-        if (s >= steps - 60) {
-            restOn = std::max(restOn, depthOn);
-            restOff = std::max(restOff, depthOff);
-        }
-        // Every contact between two rigid bodies of the ragdoll is between figure bodies that may touch.
-        btDispatcher* dispatcher = sceneOn.world().getDispatcher();
-        for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
-            const btPersistentManifold* man = dispatcher->getManifoldByIndexInternal(m);
-            const int k0 = rigidOf(man->getBody0()), k1 = rigidOf(man->getBody1());
-            if (k0 < 0 || k1 < 0) continue;
-            for (int c = 0; c < man->getNumContacts(); ++c) {
-                const btManifoldPoint& p = man->getContactPoint(c);
-                const int i = bodyOf(k0, p.m_index0), j = bodyOf(k1, p.m_index1);
-                ++selfContacts;
-                if (!std::binary_search(pairs.begin(), pairs.end(), std::pair(std::min(i, j), std::max(i, j))))
-                    ++forbidden;
+    // Four yaws, as the README's figures are taken: one drop is a chaotic sample (either of the two can rest a
+    // few millimetres deeper than the other at some yaw).
+    for (const double yaw : {0.0, M_PI / 2, M_PI, 3 * M_PI / 2}) {
+        sim::Scene sceneOn(on), sceneOff(off);
+        bullet::SpawnOptions where;
+        where.entityTransform = btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(yaw)), btVector3(0, 0, 1));
+        bullet::Ragdoll& merged = sceneOn.spawn(asset, where);
+        (void)sceneOff.spawn(asset, where);
+        const auto& pairs = asset->contactPairs();
+        const auto rigidOf = [&](const btCollisionObject* o) {
+            for (int k = 0; k < merged.rigidBodyCount(); ++k)
+                if (&merged.rigidBody(k) == o) return k;
+            return -1;
+        };
+        // A merged body's points name their child (the manifold's index of that side).
+        const auto bodyOf = [&](int rigid, int child) {
+            const std::vector<int>& bodies = merged.layout().rigids[static_cast<std::size_t>(rigid)].bodies;
+            if (bodies.size() == 1) return bodies.front();
+            REQUIRE(child >= 0);
+            REQUIRE(child < static_cast<int>(bodies.size()));
+            return bodies[static_cast<std::size_t>(child)];
+        };
+        const int steps = 180; // 3 s: landed and lying still for the last second
+        for (int s = 0; s < steps; ++s) {
+            sceneOn.step(1.0 / 60);
+            sceneOff.step(1.0 / 60);
+            const double depthOn = sceneOn.deepestContact().depthM, depthOff = sceneOff.deepestContact().depthM;
+            peakOn = std::max(peakOn, depthOn);
+            peakOff = std::max(peakOff, depthOff);
+            if (s >= steps - 60) {
+                restOn = std::max(restOn, depthOn);
+                restOff = std::max(restOff, depthOff);
+            }
+            // Every contact between two rigid bodies of the ragdoll is between figure bodies that may touch.
+            btDispatcher* dispatcher = sceneOn.world().getDispatcher();
+            for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
+                const btPersistentManifold* man = dispatcher->getManifoldByIndexInternal(m);
+                const int k0 = rigidOf(man->getBody0()), k1 = rigidOf(man->getBody1());
+                if (k0 < 0 || k1 < 0) continue;
+                for (int c = 0; c < man->getNumContacts(); ++c) {
+                    const btManifoldPoint& p = man->getContactPoint(c);
+                    const int i = bodyOf(k0, p.m_index0), j = bodyOf(k1, p.m_index1);
+                    ++selfContacts;
+                    if (!std::binary_search(pairs.begin(), pairs.end(), std::pair(std::min(i, j), std::max(i, j))))
+                        ++forbidden;
+                }
             }
         }
     }
@@ -266,7 +270,7 @@ TEST_CASE("merge: a merged humanoid lands and rests no deeper than the unmerged 
                          << " mm, rest " << restOff * 1000 << " mm; self-contact points " << selfContacts);
     CHECK(forbidden == 0);
     // The stated depth: at rest within the preset regression's 10 mm (the default method rests a few millimetres
-    // deep, merged or not: README, Methods), and within 3 mm of the unmerged figure (here 7.6 against 5.7 mm).
+    // deep, merged or not: README, Methods), and within 3 mm of the unmerged figure's worst.
     CHECK(restOn <= 0.010);
     CHECK(restOn <= restOff + 0.003);
     CHECK(peakOn <= peakOff + 0.005);

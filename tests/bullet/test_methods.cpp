@@ -11,6 +11,7 @@
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollSolver.h"
 #include "afb/sim/Report.h"
 #include "afb/sim/Scene.h"
 
@@ -449,6 +450,29 @@ TEST_CASE("joint warm starting: a hanging chain carries its weight without saggi
     INFO("cold " << cold << " m, warm " << warm << " m");
     CHECK(cold > 5e-3); // 16 mm here
     CHECK(warm < 1e-4);
+}
+
+TEST_CASE("limit warm starting: limit rows start from their last impulse exactly when the knob says so",
+          "[bullet][methods]") {
+    // The arm's hinge has its range as a separate limit constraint (speculative limits); joint warm starting tracks
+    // the hinge, limit warm starting the limit too. Resting on its stop, the limit row carries the arm's weight, and
+    // with the knob on it starts each step from the impulse it ended the last one with (warming factor 1).
+    const afb::figure::Figure f = armFigure("hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
+                                            "axis ( 0, 1, 0 ) friction 0 limit 0, 120, 0 }");
+    for (const bool limitWarm : {false, true}) {
+        Method m = methodWith("speculative-limits", "on");
+        m.warmStartingFactor = 1;
+        m.jointWarmStarting = true;
+        m.limitWarmStarting = limitWarm;
+        ArmScene s(f, m, 9.81);
+        auto* solver = dynamic_cast<afb::bullet::RagdollSolver*>(s.scene.world().getConstraintSolver());
+        REQUIRE(solver != nullptr);
+        int limits = 0, others = 0;
+        for (int k = 0; k < s.ragdoll->bulletConstraintCount(); ++k)
+            ++(s.ragdoll->bulletConstraintIsLimit(k) ? limits : others);
+        REQUIRE(limits == 1);
+        CHECK(solver->trackedCount() == static_cast<std::size_t>(others + (limitWarm ? limits : 0)));
+    }
 }
 
 TEST_CASE("direct joints: a chain of 1:10:100 masses swings with its joints held at one iteration",

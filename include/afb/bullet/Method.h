@@ -102,6 +102,11 @@ struct Method {
     /// limits). Needs the world's solver to be a RagdollSolver (sim::Scene's is); with any other solver it has no
     /// effect.
     bool jointWarmStarting = true;
+    /// Warm-started limit rows (cone, pyramid and hinge-range rows, speculative or not): they start from the
+    /// warm-starting factor times their last impulse too, so a limit carrying a limb's weight does not give a little
+    /// every substep. Needs a RagdollSolver; no effect without it. Left out of the joints' warm start until Methods
+    /// point 11 was found (README): what it was blamed for was a hull holding its corners several times.
+    bool limitWarmStarting = true;
     /// Direct joint solve: every solver iteration solves the figure's joints (anchors and locked axes) exactly, one
     /// linear system per ragdoll, and each contact, friction and limit row moves the whole ragdoll as its joints
     /// let it (its effective mass is the ragdoll's at that point, not the touching body's alone), so a landing foot
