@@ -314,11 +314,27 @@ TEST_CASE("lod: a LOD-6 humanoid dropped 1 m comes to rest without exploding, an
     CHECK(jointDifference(f, lying, r.bodyTransforms()).first < 1e-5);
     REQUIRE(r.setLod(figure::automaticLod(f, 6)).empty());
     CHECK(r.frozen());
+    // Sunk (sim::Scene sinks resting ragdolls): a switch brings the bodies back, frozen, and it sinks again later.
+    for (int s = 0; s < 40; ++s) scene.step(kDt);
+    REQUIRE(r.sunk());
+    r.setFullDetail();
+    CHECK_FALSE(r.sunk());
+    CHECK(r.frozen());
+    CHECK(jointDifference(f, lying, r.bodyTransforms()).first < 1e-5);
+    for (int s = 0; s < 40; ++s) scene.step(kDt);
+    CHECK(r.sunk());
+    REQUIRE(r.setLod(figure::automaticLod(f, 6)).empty());
+    CHECK_FALSE(r.sunk());
     r.wake(); // woken at a level of detail: its masses and constraints come back
     CHECK_FALSE(r.frozen());
     CHECK(r.rigidBody(0).getInvMass() > 0);
     for (int s = 0; s < 60; ++s) scene.step(kDt);
     CHECK(r.guardTrips() == 0);
+    // The explosion guard's saved state is the new level's: freezing puts it back to the last good substep.
+    const std::vector<figure::Transform> good = r.bodyTransforms();
+    r.freeze();
+    CHECK(r.frozen());
+    CHECK(jointDifference(f, good, r.bodyTransforms()).first < 1e-5);
 }
 
 TEST_CASE("lod: the multibody backend refuses a level of detail", "[bullet][lod]") {
