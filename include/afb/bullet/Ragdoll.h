@@ -148,11 +148,11 @@ class Ragdoll {
     btCollisionObject& collisionObject(int i);
     const btCollisionObject& collisionObject(int i) const;
     /// Rigid body of figure body `i` (rigid backend only); its transform is the body frame (centre of mass,
-    /// principal axes), unless the body was merged with others (Method::mergeFixed): then it is their compound,
+    /// principal axes), unless the body was merged with others (Method::mergeFixed, setLod): then it is their compound,
     /// whose frame is the union's (bodyInRigid(i) places the body in it).
     btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
     const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
-    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed.
+    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed or setLod.
     int rigidBodyCount() const { return static_cast<int>(m_bodies.size()); }
     btRigidBody& rigidBody(int k) { return *m_bodies[static_cast<std::size_t>(k)]; }
     const btRigidBody& rigidBody(int k) const { return *m_bodies[static_cast<std::size_t>(k)]; }
