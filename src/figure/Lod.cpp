@@ -66,7 +66,7 @@ std::variant<LodLevel, std::string> lodFromNames(const Figure& f, const std::vec
                 std::find_if(f.bodies.begin(), f.bodies.end(), [&](const FigureBody& b) { return b.name == name; });
             if (it == f.bodies.end()) return "LOD: no body \"" + name + "\" in figure " + f.name;
             const int b = static_cast<int>(it - f.bodies.begin());
-            if (named[static_cast<std::size_t>(b)]) return "LOD: body \"" + name + "\" is in more than one group";
+            if (named[static_cast<std::size_t>(b)]) return "LOD: body \"" + name + "\" is named more than once";
             named[static_cast<std::size_t>(b)] = 1;
             bodies.push_back(b);
         }

@@ -113,7 +113,8 @@ TEST_CASE("lod: a bad list is an error and changes nothing", "[bullet][lod]") {
         return std::holds_alternative<std::string>(r) ? std::get<std::string>(r) : std::string();
     };
     CHECK_THAT(error({{"torso", "tail"}}), Catch::Contains("no body \"tail\""));
-    CHECK_THAT(error({{"torso", "head"}, {"head", "pelvis"}}), Catch::Contains("more than one group"));
+    CHECK_THAT(error({{"torso", "head"}, {"head", "pelvis"}}), Catch::Contains("named more than once"));
+    CHECK_THAT(error({{"torso", "torso"}}), Catch::Contains("named more than once"));
     CHECK_THAT(error({{"l_hand", "r_hand"}}), Catch::Contains("not connected"));
     CHECK_THAT(error({{"l_thigh", "l_foot"}}), Catch::Contains("not connected")); // the shin between is missing
     CHECK(error({{}, {"pelvis"}}).empty());

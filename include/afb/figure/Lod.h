@@ -18,7 +18,7 @@ struct LodLevel {
 
 /// A caller's level: groups of body names (case-sensitive, as the .af names them). Bodies not named stay alone
 /// (or with the bodies a `fixed` constraint joins them to). An error message instead when a name is unknown, a body
-/// is named twice, or a group's bodies are not connected by the figure's constraints between them.
+/// is named more than once, or a group's bodies are not connected by the figure's constraints between them.
 std::variant<LodLevel, std::string> lodFromNames(const Figure& figure,
                                                  const std::vector<std::vector<std::string>>& groups);
 
