@@ -182,7 +182,9 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& wor
             m_frames.push_back(m_multibody->constraintFramesLocal(static_cast<int>(i)));
         return;
     }
-    addBodies(options);
+    m_group = options.collisionGroup;
+    m_spawnMask = options.collisionMask;
+    addBodies();
     m_action->remember();
     addConstraints();
     filterPairs();
@@ -256,7 +258,8 @@ int Ragdoll::awakeBodyCount() const {
 JointError Ragdoll::jointError(int i) const {
     if (m_multibody) return m_multibody->jointError(i);
     if (merged()) {
-        if (m_layout->internal[static_cast<std::size_t>(i)]) return {}; // one rigid body: holds exactly
+        // A fixed joint merged into one rigid body holds exactly; a level of detail's holds its error at the switch.
+        if (m_layout->internal[static_cast<std::size_t>(i)] && !m_lodLayout) return {};
         return jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], figureBodyTransforms(),
                             m_frames[static_cast<std::size_t>(i)], m_spawn);
     }
@@ -434,6 +437,29 @@ bool Ragdoll::checkGuard() {
 
 void Ragdoll::freeze() { m_action->restore(m_world); }
 
+void Ragdoll::rememberGoodState() { m_action->remember(); }
+
+// Frozen, the constraints are out of the world already and the bodies are in it as static objects; sunk, they are
+// brought back first.
+void Ragdoll::removeBulletObjects() {
+    surface();
+    if (!m_frozen)
+        for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+    m_frozen = false;
+    m_calmSubsteps = 0;
+    m_action->frictions.clear();
+    m_constraints.clear();
+    m_disablesCollision.clear();
+    m_limitRows.clear();
+    m_main.clear();
+    m_frames.clear();
+    m_rigidFrames.clear();
+    m_feedback.clear();
+    m_bodies.clear();
+    m_masks.clear();
+}
+
 int Ragdoll::guardTrips() const { return m_action->trips; }
 
 const std::optional<GuardTrip>& Ragdoll::lastGuardTrip() const { return m_action->lastTrip; }
@@ -456,9 +482,8 @@ Ragdoll::~Ragdoll() {
     for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
 }
 
-void Ragdoll::addBodies(const SpawnOptions& options) {
+void Ragdoll::addBodies() {
     const figure::Figure& f = figure();
-    m_group = options.collisionGroup;
     m_bodies.reserve(m_layout->rigids.size());
     m_masks.reserve(m_layout->rigids.size());
     for (const RigidLayout::Rigid& r : m_layout->rigids) {
@@ -466,7 +491,7 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
         const figure::FigureBody& b = f.bodies[static_cast<std::size_t>(r.representative)];
         btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(r.massKg), nullptr, r.shape,
                                                       toBt(r.inertiaKgM2));
-        info.m_startWorldTransform = m_spawn * toBt(r.loadPose);
+        info.m_startWorldTransform = m_lodLayout ? toBt(r.loadPose) : m_spawn * toBt(r.loadPose); // see loadPose
         info.m_friction = static_cast<btScalar>(b.contactFriction);
         info.m_restitution = static_cast<btScalar>(kBodyRestitution);
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
@@ -480,18 +505,18 @@ void Ragdoll::addBodies(const SpawnOptions& options) {
             body->setCcdMotionThreshold(radius);
             body->setCcdSweptSphereRadius(radius);
         }
-        int mask = options.collisionMask;
+        int mask = m_spawnMask;
         bool tests = false;
         for (const int i : r.bodies) {
             if (figure::attachedToWorld(f, i)) mask &= ~btBroadphaseProxy::StaticFilter;
             tests = tests || f.bodies[static_cast<std::size_t>(i)].clipMask != 0;
         }
         if (!tests) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
-        if (options.engineContactFriction) {
+        if (m_engineFriction) {
             body->setUserIndex2(kEngineFrictionMarker);
             body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
         }
-        m_world.addRigidBody(body.get(), options.collisionGroup, mask);
+        m_world.addRigidBody(body.get(), m_group, mask);
         m_bodies.push_back(std::move(body));
         m_masks.push_back(mask);
     }

@@ -51,19 +51,41 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
     if (mergeFixed) group = fixedGroups(f);
     else
         for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<int>(i);
+    // Groups ordered by their first body (a group's root is its smallest body).
+    std::vector<std::vector<int>> groups;
+    std::vector<int> index(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t root = static_cast<std::size_t>(group[i]);
+        if (index[root] < 0) {
+            index[root] = static_cast<int>(groups.size());
+            groups.emplace_back();
+        }
+        groups[static_cast<std::size_t>(index[root])].push_back(static_cast<int>(i));
+    }
+    std::vector<figure::Transform> poses;
+    for (const figure::FigureBody& b : f.bodies) poses.push_back(b.loadPose);
+    fillLayout(layout, groups, poses, m_compounds);
+}
+
+RigidLayout RagdollAsset::layoutAt(const figure::LodLevel& level, std::span<const figure::Transform> poses,
+                                   std::vector<std::unique_ptr<btCollisionShape>>& compounds) const {
+    RigidLayout layout;
+    fillLayout(layout, level.groups, poses, compounds);
+    return layout;
+}
+
+void RagdollAsset::fillLayout(RigidLayout& layout, const std::vector<std::vector<int>>& groups,
+                              std::span<const figure::Transform> poses,
+                              std::vector<std::unique_ptr<btCollisionShape>>& compounds) const {
+    const figure::Figure& f = m_figure;
+    const std::size_t n = f.bodies.size();
     layout.rigidOf.assign(n, -1);
     layout.bodyInRigid.assign(n, figure::Transform{});
     layout.bodyInRigidBt.assign(n, btTransform::getIdentity());
-    for (std::size_t i = 0; i < n; ++i) {
-        if (group[i] != static_cast<int>(i)) { // joins the rigid of its group's first body
-            const int k = layout.rigidOf[static_cast<std::size_t>(group[i])];
-            layout.rigidOf[i] = k;
-            layout.rigids[static_cast<std::size_t>(k)].bodies.push_back(static_cast<int>(i));
-            continue;
-        }
-        layout.rigidOf[i] = static_cast<int>(layout.rigids.size());
+    for (const std::vector<int>& group : groups) {
+        for (const int b : group) layout.rigidOf[static_cast<std::size_t>(b)] = static_cast<int>(layout.rigids.size());
         layout.rigids.push_back({});
-        layout.rigids.back().bodies.push_back(static_cast<int>(i));
+        layout.rigids.back().bodies = group;
     }
     for (RigidLayout::Rigid& r : layout.rigids) {
         std::vector<figure::RigidPart> parts;
@@ -71,7 +93,7 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
         r.innerRadius = m_innerRadii[static_cast<std::size_t>(r.bodies.front())];
         for (const int b : r.bodies) {
             const figure::FigureBody& body = f.bodies[static_cast<std::size_t>(b)];
-            parts.push_back({body.massKg, body.inertiaKgM2, body.loadPose});
+            parts.push_back({body.massKg, body.inertiaKgM2, poses[static_cast<std::size_t>(b)]});
             if (body.massKg > f.bodies[static_cast<std::size_t>(r.representative)].massKg) r.representative = b;
             r.innerRadius = std::min(r.innerRadius, m_innerRadii[static_cast<std::size_t>(b)]);
         }
@@ -91,7 +113,7 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
         // children: no bounding-volume tree.
         auto compound = std::make_unique<btCompoundShape>(false, static_cast<int>(r.bodies.size()));
         for (const int b : r.bodies) {
-            const figure::Transform inRigid = whole.pose.inverse() * f.bodies[static_cast<std::size_t>(b)].loadPose;
+            const figure::Transform inRigid = whole.pose.inverse() * poses[static_cast<std::size_t>(b)];
             layout.bodyInRigid[static_cast<std::size_t>(b)] = inRigid;
             layout.bodyInRigidBt[static_cast<std::size_t>(b)] = toBt(inRigid);
             compound->addChildShape(toBt(inRigid), m_shapes[static_cast<std::size_t>(b)].get());
@@ -99,7 +121,7 @@ void RagdollAsset::buildLayout(RigidLayout& layout, bool mergeFixed) {
         r.shape = compound.get();
         r.shape->getBoundingSphere(centre, radius);
         r.boundingRadius = radius;
-        m_compounds.push_back(std::move(compound));
+        compounds.push_back(std::move(compound));
     }
     for (const auto& [i, j] : m_contactPairs) {
         int a = layout.rigidOf[static_cast<std::size_t>(i)], b = layout.rigidOf[static_cast<std::size_t>(j)];

@@ -404,13 +404,36 @@ void RagdollWorld::step(double dtSeconds) {
 }
 
 void RagdollWorld::attach(Ragdoll& r) {
+    markSpeculative(r);
+    trackJoints(r);
+    m_ragdolls.push_back(&r);
+    addOwners(r, static_cast<int>(m_ragdolls.size()) - 1);
+}
+
+void RagdollWorld::markSpeculative(Ragdoll& r) {
     if (m_method.speculativeContacts)
         for (int i = 0; i < r.bodyCount(); ++i)
             if (r.collisionObject(i).getUserIndex2() == kEngineFrictionMarker)
                 r.collisionObject(i).setUserIndex2(kSpeculativeFrictionMarker);
+}
+
+void RagdollWorld::detachBodies(Ragdoll& r) {
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
+        for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+    const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
+    if (it == m_ragdolls.end()) return;
+    const int index = static_cast<int>(it - m_ragdolls.begin());
+    m_owners.erase(std::remove_if(m_owners.begin(), m_owners.end(),
+                                  [&](const BodyOwner& o) { return o.ragdoll == index; }),
+                   m_owners.end());
+}
+
+void RagdollWorld::attachBodies(Ragdoll& r) {
+    const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
+    if (it == m_ragdolls.end()) return;
+    markSpeculative(r);
     trackJoints(r);
-    m_ragdolls.push_back(&r);
-    addOwners(r, static_cast<int>(m_ragdolls.size()) - 1);
+    addOwners(r, static_cast<int>(it - m_ragdolls.begin()));
 }
 
 void RagdollWorld::trackJoints(Ragdoll& r) {

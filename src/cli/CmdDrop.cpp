@@ -12,6 +12,7 @@
 #include "afb/figure/Load.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/GltfReplay.h"
+#include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Report.h"
 
 namespace afb::cli {
@@ -48,6 +49,12 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         ->check(CLI::Range(1, 1 << 20));
     cmd->add_option("--seed", opt->seed,
                     "Random initial orientations (yaw and tilt) from this seed; default: yaw 37°·i");
+    cmd->add_option("--lod", opt->drop.lod,
+                    "Level of detail: switch every instance at spawn to N rigid bodies, the lightest body merged into "
+                    "its lightest jointed neighbour until N remain (fixed joints always merged; rigid backend only). "
+                    "bodies, us/body and awake still count the figure's bodies, so the numbers compare with a run "
+                    "without --lod")
+        ->check(CLI::Range(1, 1 << 20));
     cmd->add_option("--seconds", opt->drop.seconds, "Simulated time, s")->capture_default_str();
     cmd->add_option("--steps", opt->steps, "Exact number of steps (overrides --seconds); 0 reports the spawn pose");
     cmd->add_option("--hz", opt->drop.hz, "Fixed frame rate")->capture_default_str();
@@ -77,6 +84,11 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             exitCode = 1;
             return;
         }
+        if (opt->drop.lod && (sim::isRaw(*method) || method->backend != bullet::Backend::Rigid)) {
+            std::cerr << "afb drop: --lod needs the rigid backend (not the raw method or the multibody backend)\n";
+            exitCode = 1;
+            return;
+        }
         if (!opt->gltf.empty()) {
             std::string ext = opt->gltf.extension().string();
             for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -103,6 +115,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         std::printf("afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
                     sim::bulletVersion().c_str(), sim::bulletPrecision(), opt->drop.hz,
                     opt->drop.sleeping ? "on" : "off", units.gravityMps2, bullet::describe(opt->drop.method).c_str());
+        if (opt->drop.lod)
+            std::printf("  level of detail: --lod %d (automatic merge; each figure's rigid bodies below)\n",
+                        *opt->drop.lod);
         for (const std::string& e : opt->entities) {
             std::optional<figure::LoadedFigure> loaded;
             if (lib) loaded = figure::loadEntityFigure(*lib, e, units, diags, opt->strict);
@@ -156,6 +171,10 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                             r.worstAnchorJoint.empty() ? "-" : r.worstAnchorJoint.c_str(),
                             r.worstLimitJoint.empty() ? "-" : r.worstLimitJoint.c_str(),
                             r.worstContact.empty() ? "-" : r.worstContact.c_str());
+        for (const sim::DropResult& r : results)
+            if (r.lodBodies)
+                std::printf("  %s: level of detail, %d rigid bodies for %d bodies per instance\n", r.figure.c_str(),
+                            *r.lodBodies, r.bodies / std::max(1, opt->drop.count));
         for (const std::string& line : replays) std::printf("%s\n", line.c_str());
         nlohmann::json all = {{"bullet", sim::bulletVersion()},
                               {"precision", sim::bulletPrecision()},

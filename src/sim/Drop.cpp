@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "afb/bullet/Convert.h"
+#include "afb/figure/Lod.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
@@ -175,13 +176,16 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
                  const std::vector<btTransform>& spawns, bool holdsFirst, int steps, const DropObserver* observer) {
     const double g = asset->figure().units.gravityMps2;
     Scene scene(o.method, SceneSettings{g, true, 1.0});
+    const std::optional<figure::LodLevel> lod =
+        o.lod ? std::optional(figure::automaticLod(asset->figure(), *o.lod)) : std::nullopt;
     for (const btTransform& t : spawns) {
         bullet::SpawnOptions so;
         so.entityTransform = t;
         so.comeToRest = o.sleeping;
         so.startAtRest = o.startAtRest;
         if (isRaw(o.method)) scene.spawnRaw(asset, so);
-        else scene.spawn(asset, so);
+        else if (Ragdoll& r = scene.spawn(asset, so); lod && r.backend() == bullet::Backend::Rigid)
+            (void)r.setLod(*lod); // a partition of the figure by construction: cannot fail
     }
     if (isRaw(o.method)) return measure(scene, scene.rawRagdolls(), o, g, holdsFirst, steps, observer);
     return measure(scene, scene.ragdolls(), o, g, holdsFirst, steps, observer);
@@ -252,6 +256,8 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     r.method = o.method;
     r.bodies = static_cast<int>(figure.bodies.size()) * count;
     r.constraints = static_cast<int>(figure.constraints.size()) * count;
+    if (o.lod && !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid)
+        r.lodBodies = static_cast<int>(figure::automaticLod(figure, *o.lod).groups.size());
     // Step time: the worlds of one thread one after the other, the threads side by side.
     std::vector<double> threadStepSeconds(static_cast<std::size_t>(threadCount), 0.0);
     for (int w = 0; w < worlds; ++w)

@@ -27,6 +27,8 @@ const std::vector<Field>& fields() {
          [](const DropResult& r) { return json(r.method.name); }},
         {"bodies", "bodies over all instances", [](const DropResult& r) { return json(r.bodies); }},
         {"constraints", "constraints over all instances", [](const DropResult& r) { return json(r.constraints); }},
+        {"lod_bodies", "rigid bodies per instance at the level of detail (--lod), empty at full detail",
+         [](const DropResult& r) { return r.lodBodies ? json(*r.lodBodies) : json(nullptr); }},
         {"steps", "frames stepped", [](const DropResult& r) { return json(r.steps); }},
         {"wall_ms", "wall time of the whole run", [](const DropResult& r) { return json(r.wallMs); }},
         {"us_per_step", "stepping only, the slowest world", [](const DropResult& r) { return json(r.usPerStep); }},
@@ -121,10 +123,12 @@ std::string methodFromJson(const json& j, bullet::Method& out) {
 }
 
 json dropOptionsJson(const DropOptions& o) {
-    return {{"height_m", o.heightM},         {"count", o.count},
-            {"seconds", o.seconds},          {"hz", o.hz},
-            {"sleeping", o.sleeping},        {"seed", o.seed ? json(*o.seed) : json(nullptr)},
-            {"method", methodJson(o.method)}};
+    json j = {{"height_m", o.heightM},         {"count", o.count},
+              {"seconds", o.seconds},          {"hz", o.hz},
+              {"sleeping", o.sleeping},        {"seed", o.seed ? json(*o.seed) : json(nullptr)},
+              {"method", methodJson(o.method)}};
+    if (o.lod) j["lod"] = *o.lod; // only when set: records made before levels of detail stay as they were
+    return j;
 }
 
 std::string dropOptionsFromJson(const json& j, DropOptions& o) {
@@ -136,6 +140,7 @@ std::string dropOptionsFromJson(const json& j, DropOptions& o) {
         o.hz = j.value("hz", o.hz);
         o.sleeping = j.value("sleeping", o.sleeping);
         if (j.contains("seed") && !j["seed"].is_null()) o.seed = j["seed"].get<std::uint32_t>();
+        if (j.contains("lod") && !j["lod"].is_null()) o.lod = j["lod"].get<int>();
         if (j.contains("method")) return methodFromJson(j["method"], o.method);
         // Recorded before methods: the knobs that existed then, on top of the default method.
         o.method = *bullet::methodPreset("default");

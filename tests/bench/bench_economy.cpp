@@ -7,6 +7,8 @@
 //                      the ground, never touched), 120 steps: CPU µs per step (counter us_per_step)
 //   BM_Spawn/<method>  spawning one built figure into a world that holds 100 of it already: µs per ragdoll,
 //                      and removing it (apart); heap bytes per live instance
+//   BM_LodSwitch       one humanoid of a world of 100 (default method), 0.5 s into its fall: µs to switch it to
+//                      LOD 6 (Ragdoll::setLod) and back (setFullDetail), timed apart
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
 // solve contacts and joints with 20), default, default:merge-fixed (fixed wrists merged), fast. After the runs, a table
 // of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction counts, exact
@@ -26,6 +28,7 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/decl/Library.h"
 #include "afb/figure/Load.h"
+#include "afb/figure/Lod.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
 
@@ -261,6 +264,30 @@ void spawnBenchmark(benchmark::State& state, const Method& method, const char* l
     }
 }
 
+void lodSwitchBenchmark(benchmark::State& state) {
+    if (!humanoid()) {
+        state.SkipWithError("bundled humanoid not found");
+        return;
+    }
+    Drop drop(*afb::bullet::methodPreset("default"), 100, 1.0, false);
+    for (int s = 0; s < 30; ++s) drop.scene.step(1.0 / 60.0); // landing: bent, moving, touching
+    afb::bullet::Ragdoll& r = *drop.scene.ragdolls().front();
+    const afb::figure::LodLevel six = afb::figure::automaticLod(r.figure(), 6);
+    double toLod = 0, toFull = 0;
+    long long switches = 0;
+    for (auto _ : state) {
+        const double c0 = threadCpuSeconds();
+        (void)r.setLod(six);
+        const double c1 = threadCpuSeconds();
+        r.setFullDetail();
+        toFull += threadCpuSeconds() - c1;
+        toLod += c1 - c0;
+        ++switches;
+    }
+    state.counters["us_to_lod"] = toLod * 1e6 / static_cast<double>(switches);
+    state.counters["us_to_full"] = toFull * 1e6 / static_cast<double>(switches);
+}
+
 void registerAll() {
     for (const Labelled& m : methods()) {
         const std::string label = m.label;
@@ -281,6 +308,7 @@ void registerAll() {
     for (const Labelled& m : methods())
         benchmark::RegisterBenchmark((std::string("BM_Spawn/") + m.label).c_str(), spawnBenchmark, m.method, m.label)
             ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("BM_LodSwitch", lodSwitchBenchmark)->Unit(benchmark::kMicrosecond);
 }
 
 void printRatios() {

@@ -50,6 +50,11 @@ afb_cli_test(drop_chain 0 ARGS drop --base . chain --seconds 2 MATCH "chain" "Bu
 afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"steps\": 0" "\"final_pose\"" "\"us_per_step\"")
 afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision double MATCH "\\(double\\)")
 afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
+# afb drop --lod: the humanoid at six rigid bodies, recorded in the report; refused where it cannot apply.
+afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
+             MATCH "6 rigid bodies for 15 bodies" "\"lod_bodies\": 6" "\"lod\": 6")
+afb_cli_test(drop_lod_raw 1 ARGS drop --base . humanoid --steps 1 --lod 6 --method raw MATCH "--lod needs the rigid")
+afb_cli_test(drop_lod_help 0 ARGS drop --help MATCH "--lod")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
 
 # afb draw: the humanoid as PNG and SVG, checked by afb_picture_check (signature, size, not blank; SVG parses), and

@@ -148,11 +148,11 @@ class Ragdoll {
     btCollisionObject& collisionObject(int i);
     const btCollisionObject& collisionObject(int i) const;
     /// Rigid body of figure body `i` (rigid backend only); its transform is the body frame (centre of mass,
-    /// principal axes), unless the body was merged with others (Method::mergeFixed): then it is their compound,
+    /// principal axes), unless the body was merged with others (Method::mergeFixed, setLod): then it is their compound,
     /// whose frame is the union's (bodyInRigid(i) places the body in it).
     btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
     const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
-    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed.
+    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed or setLod.
     int rigidBodyCount() const { return static_cast<int>(m_bodies.size()); }
     btRigidBody& rigidBody(int k) { return *m_bodies[static_cast<std::size_t>(k)]; }
     const btRigidBody& rigidBody(int k) const { return *m_bodies[static_cast<std::size_t>(k)]; }
@@ -160,8 +160,24 @@ class Ragdoll {
     int rigidIndexOf(int i) const { return m_layout->rigidOf[static_cast<std::size_t>(i)]; }
     /// Figure body `i`'s frame in its rigid body's frame (identity unless merged).
     const btTransform& bodyInRigid(int i) const { return m_layout->bodyInRigidBt[static_cast<std::size_t>(i)]; }
-    /// How the figure's bodies map to rigid bodies (the asset's, for this ragdoll's method).
+    /// How the figure's bodies map to rigid bodies (the asset's for this ragdoll's method, or its level of detail's).
     const RigidLayout& layout() const { return *m_layout; }
+
+    /// Switches to a level of detail (figure::lodFromNames, figure::automaticLod; README: Economy): each group of
+    /// `level` becomes one rigid body, a compound of its bodies' shapes as they are placed now, with their exact
+    /// combined mass properties at this pose, so nothing moves: the joints inside a group hold their current
+    /// relative pose (and their current error) until setFullDetail(). Each rigid body gets its bodies' total
+    /// momentum and angular momentum about its centre of mass; a body's own state is the rigid's velocity field.
+    /// Call between steps. Rest, freezing, the explosion guard's saved state and joint warm starting carry over
+    /// (the rebuilt joints start warm starting afresh). Rigid backend only. Returns an error message and changes
+    /// nothing when `level` is not a partition of the figure's bodies or the backend is the multibody one; else an
+    /// empty string.
+    std::string setLod(const figure::LodLevel& level);
+    /// Back to one rigid body per body (or per group of Method::mergeFixed), each at its figure body's current pose
+    /// with its velocity as the level of detail moved it. No-op at full detail.
+    void setFullDetail();
+    /// Whether a level of detail is in force.
+    bool lodActive() const { return m_lodLayout != nullptr; }
     /// The main Bullet constraint of figure constraint `i` (null for a fixed constraint inside a merged body).
     btTypedConstraint* constraint(int i) { return m_main[static_cast<std::size_t>(i)]; }
     const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
@@ -255,7 +271,11 @@ class Ragdoll {
 
   private:
     class Action;
-    void addBodies(const SpawnOptions& options);
+    void addBodies();
+    void relayout(const figure::LodLevel* level); ///< see setLod; null: full detail
+    void placeRigids(std::span<const BodySample> bodies);
+    void removeBulletObjects(); ///< constraints and bodies out of the world and destroyed (the layout stays)
+    void rememberGoodState();   ///< the explosion guard's saved state := now
     void addConstraints();
     void filterPairs();
     void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
@@ -281,6 +301,7 @@ class Ragdoll {
     std::vector<bool> m_disablesCollision; ///< per Bullet constraint: added with collision between its bodies off
     std::vector<bool> m_limitRows;         ///< per Bullet constraint: one of our limit constraints
     int m_group = 0;                       ///< collision group of every body
+    int m_spawnMask = 0;                   ///< SpawnOptions::collisionMask
     std::vector<int> m_masks;              ///< collision mask of each rigid body
     bool m_frozen = false;                 ///< see frozen()
     FrozenContact m_frozenContact;
@@ -292,7 +313,9 @@ class Ragdoll {
     std::vector<std::pair<btTransform, btTransform>> m_rigidFrames; ///< see rigidFramesLocal
     std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
     std::unique_ptr<Action> m_action;
-    std::unique_ptr<detail::MultibodyRagdoll> m_multibody; ///< the multibody backend, or null for the rigid one
+    std::unique_ptr<RigidLayout> m_lodLayout;                      ///< the level of detail in force, or null
+    std::vector<std::unique_ptr<btCollisionShape>> m_lodCompounds; ///< its compound shapes
+    std::unique_ptr<detail::MultibodyRagdoll> m_multibody;         ///< the multibody backend, or null for the rigid one
 };
 
 } // namespace afb::bullet

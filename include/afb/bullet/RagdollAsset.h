@@ -1,12 +1,14 @@
 #pragma once
 // The Bullet half of a Figure that every live Ragdoll shares: collision shapes, built once.
 #include <memory>
+#include <span>
 #include <utility>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/figure/Figure.h"
+#include "afb/figure/Lod.h"
 
 namespace afb::bullet {
 
@@ -26,7 +28,9 @@ struct RigidLayout {
         int representative = 0;
         double massKg = 0;
         Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Zero(); ///< principal moments (figure::combineRigidParts)
-        figure::Transform loadPose; ///< the rigid's frame (centre of mass, principal axes), model space, load pose
+        /// The rigid's frame (centre of mass, principal axes), model space, at the load pose; for a level of detail
+        /// (RagdollAsset::layoutAt, Ragdoll::setLod), world space at the switch.
+        figure::Transform loadPose;
         btCollisionShape* shape = nullptr; ///< the body's own shape, or a btCompoundShape of its bodies' (the asset's)
         /// Radius of its continuous-collision sphere: the smallest inner radius of its bodies, metres.
         double innerRadius = 0;
@@ -72,6 +76,12 @@ class RagdollAsset {
     /// The figure's bodies as Bullet rigid bodies: one each, or (`mergeFixed`) with bodies joined by `fixed`
     /// constraints between two bodies merged into one compound.
     const RigidLayout& layout(bool mergeFixed) const { return mergeFixed ? m_merged : m_separate; }
+    /// A level of detail's layout (Ragdoll::setLod): one rigid per group of `level`, each a compound of its bodies'
+    /// shapes placed as `poses` (every body's frame, in one frame: the rigids' frames come out in it) places them,
+    /// with the exact combined mass properties at those poses. Compound shapes it makes are appended to `compounds`
+    /// (the caller owns them; they must outlive the layout). `level` must be a partition of the figure's bodies.
+    RigidLayout layoutAt(const figure::LodLevel& level, std::span<const figure::Transform> poses,
+                         std::vector<std::unique_ptr<btCollisionShape>>& compounds) const;
 
   private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
@@ -85,6 +95,9 @@ class RagdollAsset {
     RigidLayout m_separate;
     RigidLayout m_merged;
     void buildLayout(RigidLayout& layout, bool mergeFixed);
+    void fillLayout(RigidLayout& layout, const std::vector<std::vector<int>>& groups,
+                    std::span<const figure::Transform> poses,
+                    std::vector<std::unique_ptr<btCollisionShape>>& compounds) const;
 };
 
 } // namespace afb::bullet

@@ -69,12 +69,17 @@ class RagdollWorld {
     void detach(Ragdoll& ragdoll);
     /// Forgets the ragdoll's warm-started joint impulses (its explosion guard restored it); not for callers.
     void restartWarmStarting(Ragdoll& ragdoll);
+    /// Forget the ragdoll's Bullet bodies and constraints before it replaces them, and learn the new ones after
+    /// (Ragdoll::setLod); it keeps its place. Not for callers.
+    void detachBodies(Ragdoll& ragdoll);
+    void attachBodies(Ragdoll& ragdoll);
 
   private:
     class PositionAction;
     class MergedBodies;
     void addOwners(Ragdoll& ragdoll, int index);
     void trackJoints(Ragdoll& ragdoll);
+    void markSpeculative(Ragdoll& ragdoll);
 
     btDiscreteDynamicsWorld& m_world;
     Method m_method;

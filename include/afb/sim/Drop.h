@@ -30,6 +30,9 @@ struct DropOptions {
     bool sleeping = true;              ///< the figure's rest rules put it to sleep
     bool stopAtRest = false;           ///< end the run as soon as every instance is at rest
     bool startAtRest = false;          ///< spawn at rest until touched (the entity's "nodrop"/"sleep" key)
+    /// Level of detail: each instance is switched at spawn to figure::automaticLod with this many rigid bodies
+    /// (bullet::Ragdoll::setLod; rigid backend only, ignored for the raw method and the multibody backend).
+    std::optional<int> lod;
 };
 
 /// One joint of a settled pose: model space of the instance, metres.
@@ -45,6 +48,8 @@ struct DropResult {
     std::string precision; ///< "float" or "double" (btScalar of the Bullet build)
     bullet::Method method;
     int bodies = 0, constraints = 0, steps = 0;
+    /// Rigid bodies per instance at the level of detail (DropOptions::lod), or nullopt at full detail.
+    std::optional<int> lodBodies;
     double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
     long long awakeBodySteps = 0;
     /// Thread CPU time inside the steps (CLOCK_THREAD_CPUTIME_ID), summed over the worlds, milliseconds.
