@@ -26,10 +26,12 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
     // Bounds on the 3 s drop of one humanoid (yaw 0) at 60 Hz; "legacy" is the method before presets existed
     // (world iterations 10, joints 20, no extras), kept as the reference the presets must beat.
     const Bounds bounds[] = {
-        {"fast", 0.025, 16, 0.01},    // measured 21.5 mm, 14.5°, 4.3 mm
-        {"default", 0.024, 14, 0.01}, // 20.3 mm, 12.7°, 3.1 mm
-        {"accurate", 0.012, 6, 0.01}, // 8.9 mm, 2.8°, 4.3 mm
-        {"exact", 0.001, 4, 0.01},    // 0.1 mm, 2.8° (direct joint solve, tree position step), 2.4 mm
+        // Rest penetration at the accuracy issue's 5 mm for every preset (since hulls hold each corner once and limit
+        // rows are warm-started: README, Methods points 7 and 11).
+        {"fast", 0.025, 15, 0.005},    // measured 21.5 mm, 13.2°, 3.2 mm
+        {"default", 0.024, 13, 0.005}, // 20.3 mm, 11.0°, 2.5 mm
+        {"accurate", 0.012, 3, 0.005}, // 8.9 mm, 1.7°, 3.4 mm
+        {"exact", 0.001, 4, 0.005},    // 0.1 mm, 2.5° (direct joint solve, tree position step), 2.6 mm
     };
     afb::sim::DropOptions o;
     o.heightM = 1.0;
