@@ -278,6 +278,15 @@ std::vector<figure::Transform> Ragdoll::bodyTransforms() const {
     return out;
 }
 
+void Ragdoll::placeRigid(btRigidBody& b, const btTransform& t, const btVector3& v, const btVector3& w) {
+    b.setCenterOfMassTransform(t);
+    b.setInterpolationWorldTransform(t);
+    b.setLinearVelocity(v);
+    b.setAngularVelocity(w);
+    b.setInterpolationLinearVelocity(v);
+    b.setInterpolationAngularVelocity(w);
+}
+
 bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
     if (states.size() != static_cast<std::size_t>(bodyCount())) return false;
     if (m_multibody) {
@@ -291,12 +300,7 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
         const btTransform t = toBt(states[i].pose) * m_layout->bodyInRigidBt[i].inverse();
         const btVector3 w = toBt(states[i].angularVelocity);
         const btVector3 v = toBt(states[i].linearVelocity) + w.cross(t.getOrigin() - toBt(states[i].pose.position));
-        b.setCenterOfMassTransform(t);
-        b.setInterpolationWorldTransform(t);
-        b.setLinearVelocity(v);
-        b.setAngularVelocity(w);
-        b.setInterpolationLinearVelocity(v);
-        b.setInterpolationAngularVelocity(w);
+        placeRigid(b, t, v, w);
         m_world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
                                                                                 m_world.getDispatcher());
     }

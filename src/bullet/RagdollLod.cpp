@@ -125,12 +125,7 @@ void Ragdoll::placeRigids(std::span<const BodySample> bodies) {
             v = toBt(Eigen::Vector3d(momentum / r.massKg));
             w = toBt(Eigen::Vector3d(inertia.ldlt().solve(angular)));
         }
-        b.setCenterOfMassTransform(t);
-        b.setInterpolationWorldTransform(t);
-        b.setLinearVelocity(v);
-        b.setAngularVelocity(w);
-        b.setInterpolationLinearVelocity(v);
-        b.setInterpolationAngularVelocity(w);
+        placeRigid(b, t, v, w);
         if (b.getBroadphaseHandle()) m_world.updateSingleAabb(&b);
     }
 }

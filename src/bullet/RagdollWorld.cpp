@@ -418,8 +418,7 @@ void RagdollWorld::markSpeculative(Ragdoll& r) {
 }
 
 void RagdollWorld::detachBodies(Ragdoll& r) {
-    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
-        for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+    untrackJoints(r);
     const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
     if (it == m_ragdolls.end()) return;
     const int index = static_cast<int>(it - m_ragdolls.begin());
@@ -448,15 +447,18 @@ void RagdollWorld::trackJoints(Ragdoll& r) {
         }
 }
 
-void RagdollWorld::restartWarmStarting(Ragdoll& r) {
+void RagdollWorld::untrackJoints(Ragdoll& r) {
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+}
+
+void RagdollWorld::restartWarmStarting(Ragdoll& r) {
+    untrackJoints(r);
     trackJoints(r);
 }
 
 void RagdollWorld::detach(Ragdoll& r) {
-    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
-        for (int k = 0; k < r.bulletConstraintCount(); ++k) solver->untrack(r.bulletConstraint(k));
+    untrackJoints(r);
     const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
     if (it == m_ragdolls.end()) return;
     const int gone = static_cast<int>(it - m_ragdolls.begin());

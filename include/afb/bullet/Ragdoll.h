@@ -274,6 +274,8 @@ class Ragdoll {
     void addBodies();
     void relayout(const figure::LodLevel* level); ///< see setLod; null: full detail
     void placeRigids(std::span<const BodySample> bodies);
+    /// Puts `b` at `t` with velocities `v`, `w` (and Bullet's interpolation state with them).
+    static void placeRigid(btRigidBody& b, const btTransform& t, const btVector3& v, const btVector3& w);
     void removeBulletObjects(); ///< constraints and bodies out of the world and destroyed (the layout stays)
     void rememberGoodState();   ///< the explosion guard's saved state := now
     void addConstraints();

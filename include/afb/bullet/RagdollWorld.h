@@ -79,6 +79,7 @@ class RagdollWorld {
     class MergedBodies;
     void addOwners(Ragdoll& ragdoll, int index);
     void trackJoints(Ragdoll& ragdoll);
+    void untrackJoints(Ragdoll& ragdoll); ///< what trackJoints tracked, no longer
     void markSpeculative(Ragdoll& ragdoll);
 
     btDiscreteDynamicsWorld& m_world;
