@@ -39,6 +39,8 @@ struct Side {
     btScalar invMass = 0;
     btMatrix3x3 invInertia{0, 0, 0, 0, 0, 0, 0, 0, 0}; ///< world
     bool moved = false;
+    btVector3 x0{0, 0, 0}; ///< the pose the pass started from
+    btQuaternion q0 = btQuaternion::getIdentity();
 
     btTransform transform() const { return btTransform(r, x); }
     void updateRotation() {
@@ -55,6 +57,8 @@ Side sideOf(btRigidBody* body) {
     s.x = t.getOrigin();
     t.getBasis().getRotation(s.q);
     s.invMass = body->getInvMass();
+    s.x0 = s.x;
+    s.q0 = s.q;
     s.invInertiaLocal = body->getInvInertiaDiagLocal();
     s.updateRotation();
     return s;
@@ -216,6 +220,28 @@ bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
     if (w < SIMD_EPSILON) return false;
     applyLinear(a, b, n * (kContactFraction * depth / w), ra, rb);
     return true;
+}
+
+// Method::positionVelocity: the pass moved the body by Δx since the step integrated it by v·dt. The fraction of
+// that motion the pass took back (how far Δx goes against v, over |v|·dt, clamped to [0, 1]) is removed from v,
+// so that a motion the pass reverts every substep does not live on in the velocity. A move across v takes
+// nothing; no speed grows and none turns round. The same for ω and the pass's turn Δθ. (Measured against
+// removing only v's component along Δx, which keeps the rest: this passes more of the stress matrix.)
+btVector3 withoutTakenBack(const btVector3& v, const btVector3& moved, btScalar dt) {
+    const btScalar vv = v.length2();
+    if (vv < SIMD_EPSILON * SIMD_EPSILON) return v;
+    const btScalar back = btClamped(-moved.dot(v) / (vv * dt), btScalar(0), btScalar(1));
+    return v * (1 - back);
+}
+
+void takeBackVelocity(const Side& s, btScalar dt) {
+    if (!(dt > 0)) return;
+    btQuaternion dq = s.q * s.q0.inverse();
+    if (dq.w() < 0) dq = -dq;
+    const btScalar angle = dq.getAngle();
+    const btVector3 turned = angle > SIMD_EPSILON ? dq.getAxis() * angle : btVector3(0, 0, 0);
+    s.body->setLinearVelocity(withoutTakenBack(s.body->getLinearVelocity(), s.x - s.x0, dt));
+    s.body->setAngularVelocity(withoutTakenBack(s.body->getAngularVelocity(), turned, dt));
 }
 
 // Every joint at once: a Newton step on the ragdoll's joint tree with the bodies' masses (Baraff's block
@@ -421,7 +447,8 @@ class JointTree {
 
 } // namespace
 
-void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentManifold* const> manifolds) {
+void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentManifold* const> manifolds, btScalar dt,
+                  bool takeVelocity) {
     const figure::Figure& f = r.figure();
     std::vector<Side> bodies;
     // One side per Bullet rigid body (figure bodies merged by Method::mergeFixed share one).
@@ -532,8 +559,11 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
     // tens of degrees, three reach the tolerance).
     for (int n = 0; haveTree && n < 3; ++n)
         if (!tree.step(bodies, rowsOf)) break;
-    for (Side& s : bodies)
-        if (s.moved) s.body->setCenterOfMassTransform(s.transform());
+    for (Side& s : bodies) {
+        if (!s.moved) continue;
+        s.body->setCenterOfMassTransform(s.transform());
+        if (takeVelocity) takeBackVelocity(s, dt);
+    }
 }
 
 } // namespace afb::bullet::detail

@@ -133,7 +133,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
         if (m_owner.m_ragdolls.empty()) return;
         wakeTouched(world);
         const int iterations = m_owner.m_method.positionIterations;
-        if (iterations > 0 || m_owner.m_method.positionTree > 0) positionPass(world, iterations);
+        if (iterations > 0 || m_owner.m_method.positionTree > 0) positionPass(world, iterations, dt);
         if (m_owner.m_method.speculativeContacts) {
             publishMultibodyVelocities();
             widenContacts(world, dt);
@@ -270,7 +270,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
         return out;
     }
 
-    void positionPass(btCollisionWorld* world, int iterations) {
+    void positionPass(btCollisionWorld* world, int iterations, btScalar dt) {
         // Contacts per ragdoll, in the dispatcher's order: one pass over the manifolds for all ragdolls.
         m_contacts.resize(m_owner.m_ragdolls.size());
         for (auto& list : m_contacts) list.clear();
@@ -287,7 +287,8 @@ class RagdollWorld::PositionAction : public btActionInterface {
             Ragdoll& r = *m_owner.m_ragdolls[k];
             // A multibody ragdoll's tree joints hold by construction; the pass moves rigid bodies only.
             if (r.atRest() || r.backend() == Backend::Multibody) continue;
-            detail::positionPass(r, iterations, m_owner.m_method.positionTree, m_contacts[k]);
+            detail::positionPass(r, iterations, m_owner.m_method.positionTree, m_contacts[k], dt,
+                                 m_owner.m_method.positionVelocity);
         }
     }
     void debugDraw(btIDebugDraw*) override {}

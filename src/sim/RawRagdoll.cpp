@@ -37,6 +37,7 @@ bullet::Method rawMethod() {
     m.speculativeLimits = false;
     m.jointWarmStarting = false;
     m.limitWarmStarting = false;
+    m.positionVelocity = false;
     return m;
 }
 
@@ -47,6 +48,7 @@ std::string rawMethodError(const bullet::Method& m) {
     std::string knobs;
     if (m.positionIterations > 0) knobs += " position-iterations";
     if (m.positionTree > 0) knobs += " position-tree";
+    if (m.positionVelocity) knobs += " position-velocity";
     if (m.directJoints) knobs += " direct-joints";
     if (m.speculativeContacts) knobs += " speculative-contacts";
     if (m.speculativeLimits) knobs += " speculative-limits";

@@ -14,6 +14,7 @@
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/sim/Report.h"
 #include "afb/sim/Scene.h"
+#include "bullet/PositionPass.h"
 
 namespace {
 
@@ -116,6 +117,41 @@ TEST_CASE("position pass: a separated joint is closed within one step", "[bullet
     CHECK(without > 0.02);
     const double with = separatedAfterOneStep(methodWith("position-iterations", "4"));
     CHECK(with < 1e-4);
+}
+
+TEST_CASE("position velocity: a motion the pass takes back is taken out of the velocity", "[bullet][methods]") {
+    // The arm hangs from the world by a ball joint at its centre of mass, so the pass closes a gap by moving the
+    // arm alone and without turning it. The arm stands 1 cm off the anchor, as if the substep had carried it there
+    // at v = 1 cm / dt. With the knob, the pass moves it back and takes v with it (a motion it reverts every
+    // substep would otherwise live on in the velocity); a velocity across the move, which the pass did not
+    // undo, is kept either way. Without the knob, velocities are left as they were (post-stabilisation).
+    const afb::figure::Figure f =
+        armFigure("ballAndSocketJoint \"b\" { body1 \"arm\" body2 \"world\" anchor ( 10, 0, 100 ) friction 0 }");
+    const btScalar dt = btScalar(1.0 / 60.0), gap = btScalar(0.01);
+    auto afterPass = [&](bool takeVelocity, const btVector3& velocity) {
+        ArmScene s(f, legacy(), 0);
+        btRigidBody& arm = s.ragdoll->body(1);
+        REQUIRE(s.anchorError(1) < 1e-6); // the anchor is the arm's centre of mass
+        btTransform t = arm.getCenterOfMassTransform();
+        t.getOrigin() += btVector3(0, gap, 0);
+        arm.setCenterOfMassTransform(t);
+        arm.setLinearVelocity(velocity);
+        arm.setAngularVelocity(btVector3(0, 0, 0));
+        afb::bullet::detail::positionPass(*s.ragdoll, 4, 0, {}, dt, takeVelocity);
+        CHECK(s.anchorError(1) < 1e-4);
+        return std::pair{arm.getLinearVelocity(), arm.getAngularVelocity()};
+    };
+    const btVector3 along(0, gap / dt, 0), across(btScalar(0.3), 0, 0);
+    const auto [taken, takenSpin] = afterPass(true, along);
+    CHECK(taken.length() < 1e-3 * along.length());
+    CHECK(takenSpin.length() < 1e-9);
+    const auto [kept, keptSpin] = afterPass(false, along);
+    CHECK((kept - along).length() < 1e-6);
+    const auto [acrossTaken, acrossSpin] = afterPass(true, across);
+    CHECK((acrossTaken - across).length() < 1e-6);
+    // Half the motion taken back (the velocity carried the arm twice as far as the gap): half the velocity stays.
+    const auto [half, halfSpin] = afterPass(true, along * 2);
+    CHECK(half.y() == Approx(along.y()).epsilon(1e-3));
 }
 
 TEST_CASE("position tree: every joint of a separated chain is closed at once", "[bullet][methods]") {

@@ -71,6 +71,12 @@ struct Method {
     /// step does not include contacts: 2 holds limits to tenths of a degree but pushes limbs deeper into the
     /// ground (README: Methods). Joints that close a loop and sliders are left to the sweeps.
     int positionTree = 0;
+    /// Velocities follow the position pass: a body the pass moved back against the motion its velocity made in the
+    /// substep loses that part of its velocity (the fraction of v·dt the pass undid along v, and the same for ω).
+    /// Without it a velocity the pass reverts every substep lives on: a lying leg kept twisting at 11 rad/s at
+    /// 30 Hz while its pose stood still, and figures never came to rest (README: Methods). Only ever reduces a
+    /// speed along its own direction. Rigid backend; the multibody backend's sweeps ignore it.
+    bool positionVelocity = true;
     /// Full contact manifolds on planes: hulls and boxes against a static plane take their contact points from
     /// the (up to four) vertices that come nearest the plane within the step, kept from step to step by vertex
     /// (afbullet's own polytope–plane algorithm; Bullet's finds one point per step, and its manifold merges
