@@ -203,7 +203,10 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
                     lastSecondSpin = spin;
                     lastSecondSpinBody = bodyLabel(dolls, k, body);
                 }
-                if (spin > windowSpin) {
+                // A rest window's spin counts from its second half: its first steps belong to the settling of
+                // the motion that ended just before (a link landing flat spins down over a few steps, turning
+                // less than the rest bound).
+                if (spin > windowSpin && judge.now - restStart >= th.restWindowS / 2 - 1e-9) {
                     windowSpin = spin;
                     windowSpinBody = bodyLabel(dolls, k, body);
                 }

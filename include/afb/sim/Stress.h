@@ -28,7 +28,8 @@ enum class StressCause {
     Limit,       ///< a limit exceeded by more than maxLimitOvershootDeg
     Penetration, ///< a contact deeper than maxPenetrationM (or a body centre that far under the ground) after
                  ///< penetrationAfterS
-    Jitter,      ///< some body turned faster than maxResidualSpinRadps in the run's last second
+    Jitter,      ///< some body turned faster than maxResidualSpinRadps in the run's last second, or in the second
+                 ///< half of a rest window (held still while it reports a spin)
     EnergyGain,  ///< total energy above its start (plus external work) by more than maxEnergyGainJ
     NoRest,      ///< never rested within restWithinS, without jitter (creeping, sliding)
     Skipped,     ///< not run: the scenario needs a figure that was not given (the bundled humanoid)
