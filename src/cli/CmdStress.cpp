@@ -178,7 +178,7 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
         const bool tty = ::isatty(STDERR_FILENO) != 0;
         const sim::StressThresholds thresholds;
         const std::vector<sim::StressResult> results =
-            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, [&](int done, int total) {
+            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, 1, [&](int done, int total) {
                 if (!tty) return;
                 std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
                 std::fflush(stderr);
