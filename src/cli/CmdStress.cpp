@@ -1,5 +1,6 @@
 // afb stress: the scenario × method matrix of where ragdolls fail (sim/Stress.h), as a terminal table, stress.md,
 // stress.json and a heat map drawn by gnuplot.
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -44,7 +45,8 @@ std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim
     }
     // Skipped (-1) is a grey step below the red-to-green scale of the fraction passed (a repeated gray value
     // makes the palette discontinuous there).
-    gp << "set terminal pngcairo size " << 260 + (yaws > 1 ? 190 : 130) * cols << "," << 120 + 30 * rows
+    // At least 720 px wide, so the title (centred over the cells) fits over one or two columns.
+    gp << "set terminal pngcairo size " << std::max(720, 260 + (yaws > 1 ? 190 : 130) * cols) << "," << 120 + 30 * rows
        << " font \"DejaVu Sans,10\" noenhanced\nset output \"stress.png\"\n"
        << "set title \""
        << (yaws > 1 ? "afb stress: runs passed of " + std::to_string(yaws) + " yaws (green: all rest within the limits)"
@@ -58,7 +60,10 @@ std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim
     for (int s = 0; s < rows; ++s)
         gp << (s ? ", " : "") << gpQuoted(scenarios[static_cast<std::size_t>(s)]) << " " << rows - 1 - s;
     gp << ")\nset tics scale 0\nunset xtics\nset lmargin 24\n"
-       << "plot \"stress.dat\" using 1:2:3 with image notitle, \"stress.dat\" using 1:2:4 with labels notitle\n"
+       // Filled boxes, not `with image`: an image needs a grid of at least 2 x 2 cells and draws nothing for one
+       // method or one scenario.
+       << "plot \"stress.dat\" using 1:2:(0.5):(0.5):3 with boxxyerror fillstyle solid noborder lc palette notitle, "
+          "\"stress.dat\" using 1:2:4 with labels notitle\n"
        << "set output\n";
     std::ofstream dataFile(dir / "stress.dat");
     dataFile << data.str();

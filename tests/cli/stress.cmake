@@ -99,3 +99,7 @@ if(NOT GNUPLOT)
 endif()
 run(0 ${CHECK} png ${TMP}/stress.png)
 run(0 ${CHECK} png ${TMP}/yaws/stress.png)
+# One cell (one method, one scenario) is drawn too: gnuplot's `with image` drew nothing for a grid under 2 x 2.
+# default passes tiny-bodies at both yaws, so the cell is green.
+run(0 ${AFB} stress --methods default --scenarios tiny-bodies --yaws 2 --out ${TMP}/one)
+run(0 ${CHECK} colour ${TMP}/one/stress.png 4daf4a 10)
