@@ -1,5 +1,6 @@
 // afb stress: the scenario × method matrix of where ragdolls fail (sim/Stress.h), as a terminal table, stress.md,
 // stress.json and a heat map drawn by gnuplot.
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -24,31 +25,34 @@ std::string gpQuoted(const std::string& s) {
     return out + "\"";
 }
 
-// stress.dat (one row per cell: method column, scenario row, 0 pass / 0.5 skipped / 1 fail, label) and stress.gp,
-// which renders stress.png: green cells pass, red cells fail with the cause and time written in them.
+// stress.dat (one row per cell: method column, scenario row, the fraction of its runs that passed or -1 when
+// skipped, label) and stress.gp, which renders stress.png: green cells pass at every yaw, red cells at none (shades
+// between), grey cells were skipped; the cell's table text (sim::stressCellText) is written in it.
 std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim::StressResult>& results,
                          const std::vector<sim::StressMethod>& methods, const std::vector<std::string>& scenarios) {
     std::ostringstream data, gp;
     const int rows = static_cast<int>(scenarios.size()), cols = static_cast<int>(methods.size());
-    for (const sim::StressResult& r : results) {
+    const std::vector<sim::StressCell> cells = sim::stressCells(results);
+    const int yaws = cells.empty() ? 1 : cells.front().total;
+    for (const sim::StressCell& c : cells) {
         int col = 0, row = 0;
         for (int m = 0; m < cols; ++m)
-            if (methods[static_cast<std::size_t>(m)].label == r.method) col = m;
+            if (methods[static_cast<std::size_t>(m)].label == c.method) col = m;
         for (int s = 0; s < rows; ++s)
-            if (scenarios[static_cast<std::size_t>(s)] == r.scenario) row = rows - 1 - s; // first scenario on top
-        const double value = r.passed() ? 0.0 : r.cause == sim::StressCause::Skipped ? 0.5 : 1.0;
-        std::string label = r.passed() ? "ok" : std::string(sim::toString(r.cause));
-        if (r.failedAtS) {
-            char buf[32];
-            std::snprintf(buf, sizeof buf, " %.2fs", *r.failedAtS);
-            label += buf;
-        }
-        data << col << "\t" << row << "\t" << value << "\t" << gpQuoted(label) << "\n";
+            if (scenarios[static_cast<std::size_t>(s)] == c.scenario) row = rows - 1 - s; // first scenario on top
+        const double value = c.skipped() ? -1.0 : static_cast<double>(c.passed) / static_cast<double>(c.total);
+        data << col << "\t" << row << "\t" << value << "\t" << gpQuoted(sim::stressCellText(c, results)) << "\n";
     }
-    gp << "set terminal pngcairo size " << 260 + 130 * cols << "," << 120 + 30 * rows
+    // Skipped (-1) is a grey step below the red-to-green scale of the fraction passed (a repeated gray value
+    // makes the palette discontinuous there).
+    // At least 720 px wide, so the title (centred over the cells) fits over one or two columns.
+    gp << "set terminal pngcairo size " << std::max(720, 260 + (yaws > 1 ? 190 : 130) * cols) << "," << 120 + 30 * rows
        << " font \"DejaVu Sans,10\" noenhanced\nset output \"stress.png\"\n"
-       << "set title \"afb stress: first failure per scenario and method (green: rests within the limits)\"\n"
-       << "unset colorbox\nset cbrange [0:1]\nset palette defined (0 \"#4daf4a\", 0.5 \"#cccccc\", 1 \"#e41a1c\")\n"
+       << "set title \""
+       << (yaws > 1 ? "afb stress: runs passed of " + std::to_string(yaws) + " yaws (green: all rest within the limits)"
+                    : std::string("afb stress: first failure per scenario and method (green: rests within the limits)"))
+       << "\"\nunset colorbox\nset cbrange [-1:1]\n"
+       << "set palette defined (-1 \"#cccccc\", -0.001 \"#cccccc\", 0 \"#e41a1c\", 0.5 \"#fdae61\", 1 \"#4daf4a\")\n"
        << "set xrange [-0.5:" << cols - 0.5 << "]\nset yrange [-0.5:" << rows - 0.5 << "]\nset x2tics (";
     for (int m = 0; m < cols; ++m)
         gp << (m ? ", " : "") << gpQuoted(methods[static_cast<std::size_t>(m)].label) << " " << m;
@@ -56,7 +60,10 @@ std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim
     for (int s = 0; s < rows; ++s)
         gp << (s ? ", " : "") << gpQuoted(scenarios[static_cast<std::size_t>(s)]) << " " << rows - 1 - s;
     gp << ")\nset tics scale 0\nunset xtics\nset lmargin 24\n"
-       << "plot \"stress.dat\" using 1:2:3 with image notitle, \"stress.dat\" using 1:2:4 with labels notitle\n"
+       // Filled boxes, not `with image`: an image needs a grid of at least 2 x 2 cells and draws nothing for one
+       // method or one scenario.
+       << "plot \"stress.dat\" using 1:2:(0.5):(0.5):3 with boxxyerror fillstyle solid noborder lc palette notitle, "
+          "\"stress.dat\" using 1:2:4 with labels notitle\n"
        << "set output\n";
     std::ofstream dataFile(dir / "stress.dat");
     dataFile << data.str();
@@ -64,6 +71,13 @@ std::string writeHeatMap(const std::filesystem::path& dir, const std::vector<sim
     scriptFile << gp.str();
     if (!dataFile || !scriptFile) return "cannot write " + (dir / "stress.gp").string();
     return {};
+}
+
+// A yaw in degrees as the tables write it ("22.5").
+std::string fixedYaw(double deg) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.1f", deg);
+    return buf;
 }
 
 } // namespace
@@ -81,6 +95,7 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
         std::vector<std::string> scenarios;
         std::filesystem::path out = "stress";
         int threads = 2;
+        int yaws = 1;
         std::string precision;
         bool list = false, ci = false;
     };
@@ -98,6 +113,11 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
     cmd->add_option("--out", opt->out, "Output folder (created)")->capture_default_str();
     cmd->add_option("--threads", opt->threads, "Worker threads (each run owns its world)")
         ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->add_option("--yaws", opt->yaws,
+                    "run each scenario at N orientations about the vertical (yaw k·360°/N); a cell reports how many "
+                    "passed")
+        ->check(CLI::Range(1, 64))
         ->capture_default_str();
     cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
         ->check(CLI::IsMember({"float", "double"}));
@@ -171,18 +191,19 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
             exitCode = 1;
             return;
         }
-        std::printf("afb stress: Bullet %s (%s), %zu scenarios x %zu methods on %d threads into %s\n",
-                    sim::bulletVersion().c_str(), sim::bulletPrecision(), scenarios.size(), methods.size(),
-                    opt->threads, opt->out.string().c_str());
+        std::printf("afb stress: Bullet %s (%s), %zu scenarios x %zu methods x %d yaw%s on %d threads into %s\n",
+                    sim::bulletVersion().c_str(), sim::bulletPrecision(), scenarios.size(), methods.size(), opt->yaws,
+                    opt->yaws == 1 ? "" : "s", opt->threads, opt->out.string().c_str());
         std::fflush(stdout);
         const bool tty = ::isatty(STDERR_FILENO) != 0;
         const sim::StressThresholds thresholds;
         const std::vector<sim::StressResult> results =
-            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, [&](int done, int total) {
-                if (!tty) return;
-                std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
-                std::fflush(stderr);
-            });
+            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, opt->yaws,
+                                 [&](int done, int total) {
+                                     if (!tty) return;
+                                     std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
+                                     std::fflush(stderr);
+                                 });
         std::ofstream(opt->out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
         std::ofstream(opt->out / "stress.json") << sim::stressJson(results, methods, thresholds);
         std::vector<std::string> scenarioNames;
@@ -190,14 +211,22 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
         std::string plotError = writeHeatMap(opt->out, results, methods, scenarioNames);
         if (plotError.empty()) plotError = runGnuplot(opt->out, "stress.gp");
         std::printf("\n%s", sim::stressTable(results, methods).c_str());
-        int failed = 0;
-        for (const sim::StressResult& r : results)
-            if (!r.passed() && r.cause != sim::StressCause::Skipped) {
-                ++failed;
-                std::printf("  %s / %s: %s at %.3f s: %s\n", r.scenario.c_str(), r.method.c_str(),
-                            std::string(sim::toString(r.cause)).c_str(), r.failedAtS.value_or(0), r.detail.c_str());
-            }
-        std::printf("%d of %zu cells failed\n", failed, results.size());
+        // Each failing cell with its first failing run (the lowest yaw); every run is in stress.md.
+        const std::vector<sim::StressCell> cells = sim::stressCells(results);
+        int failedCells = 0, failedRuns = 0;
+        for (const sim::StressCell& c : cells) {
+            if (c.skipped() || !c.firstFailure) continue;
+            ++failedCells;
+            failedRuns += c.total - c.passed;
+            const sim::StressResult& r = results[*c.firstFailure];
+            const std::string yaw = opt->yaws == 1 ? std::string() : " (first at yaw " + fixedYaw(r.yawDeg) + "°)";
+            std::printf("  %s / %s%s: %s at %.3f s: %s\n", r.scenario.c_str(), r.method.c_str(), yaw.c_str(),
+                        std::string(sim::toString(r.cause)).c_str(), r.failedAtS.value_or(0), r.detail.c_str());
+        }
+        if (opt->yaws == 1) std::printf("%d of %zu cells failed\n", failedCells, cells.size());
+        else
+            std::printf("%d of %zu cells failed at one yaw or more (%d of %zu runs)\n", failedCells, cells.size(),
+                        failedRuns, results.size());
         if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
         std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", opt->out.string().c_str(),
                     plotError.empty() ? ",stress.png" : "");

@@ -6,6 +6,7 @@
 //   afb_picture_check svg FILE                  well-formed XML (expat) whose root is <svg> with a width and
 //   height afb_picture_check same A.png B.png TOP TOL  same size, and every pixel below row TOP within TOL
 //   per channel
+//   afb_picture_check colour FILE RRGGBB PCT    at least PCT % of all pixels exactly colour RRGGBB (hex)
 // Exit code 0 when the check holds; otherwise 1 with the reason on stderr.
 #include <algorithm>
 #include <cstdint>
@@ -144,6 +145,20 @@ int checkSame(const char* a, const char* b, int top, int tolerance) {
     return 0;
 }
 
+int checkColour(const char* path, const char* hex, double minPercent) {
+    const SurfacePtr image = decode(path);
+    if (!image) return fail(std::string(path) + ": cannot decode it");
+    const auto colour = static_cast<std::uint32_t>(std::strtoul(hex, nullptr, 16));
+    const int w = cairo_image_surface_get_width(image.get()), h = cairo_image_surface_get_height(image.get());
+    long count = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) count += pixel(image.get(), x, y) == colour;
+    const double percent = 100.0 * double(count) / (double(w) * double(h));
+    std::printf("%s: %.1f%% of the pixels are #%06x\n", path, percent, colour);
+    if (percent < minPercent) return fail("fewer than " + std::to_string(minPercent) + "% of the pixels");
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -151,5 +166,7 @@ int main(int argc, char** argv) {
     if (mode == "png" && argc == 3) return checkPng(argv[2]);
     if (mode == "svg" && argc == 3) return checkSvg(argv[2]);
     if (mode == "same" && argc == 6) return checkSame(argv[2], argv[3], std::atoi(argv[4]), std::atoi(argv[5]));
-    return fail("usage: afb_picture_check png FILE | svg FILE | same A.png B.png SKIP_TOP TOLERANCE");
+    if (mode == "colour" && argc == 5) return checkColour(argv[2], argv[3], std::atof(argv[4]));
+    return fail(
+        "usage: afb_picture_check png FILE | svg FILE | same A.png B.png SKIP_TOP TOLERANCE | colour FILE RRGGBB PCT");
 }

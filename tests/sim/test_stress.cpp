@@ -3,7 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -158,6 +160,179 @@ TEST_CASE("stress: runs are deterministic and the matrix does not depend on the 
     const std::string md = sim::stressMarkdown(one, methods, {});
     CHECK(md.find("| chain-mass-10 |") != std::string::npos);
     CHECK(sim::stressJson(one, methods, {}).find("\"max_energy_gain_j\"") != std::string::npos);
+}
+
+namespace {
+
+bool sameTransform(const figure::Transform& a, const figure::Transform& b, double tolerance) {
+    return (a.rotation - b.rotation).cwiseAbs().maxCoeff() <= tolerance &&
+           (a.position - b.position).cwiseAbs().maxCoeff() <= tolerance;
+}
+
+} // namespace
+
+TEST_CASE("stress yaws: a setup turned about the vertical", "[sim][stress]") {
+    const sim::StressSetup setup = setupOf("humanoid-projectile", bundled());
+    REQUIRE(setup.impulse);
+    SECTION("yaw 0 is the setup, bit for bit") {
+        const sim::StressSetup same = sim::yawedSetup(setup, 0);
+        REQUIRE(same.spawns.size() == setup.spawns.size());
+        CHECK(same.spawns[0].entity.rotation == setup.spawns[0].entity.rotation);
+        CHECK(same.spawns[0].entity.position == setup.spawns[0].entity.position);
+        CHECK(same.impulse->impulseNs == setup.impulse->impulseNs);
+    }
+    SECTION("90°: x goes to y, z stays; the impulse and velocities turn with the figure") {
+        sim::StressSetup moving = setup;
+        moving.spawns[0].entity.position = Eigen::Vector3d(1, 2, 3);
+        moving.spawns[0].linearVelocity = Eigen::Vector3d(4, 0, -1);
+        moving.spawns[0].angularVelocity = Eigen::Vector3d(0, 5, 2);
+        const sim::StressSetup turned = sim::yawedSetup(moving, 90);
+        CHECK(turned.spawns[0].entity.position == Eigen::Vector3d(-2, 1, 3));
+        CHECK(turned.spawns[0].linearVelocity == Eigen::Vector3d(0, 4, -1));
+        CHECK(turned.spawns[0].angularVelocity == Eigen::Vector3d(-5, 0, 2));
+        CHECK(turned.impulse->impulseNs == Eigen::Vector3d(-500, 0, 0)); // was +y
+        // Each body axis turned: the rotation's columns, their z unchanged.
+        const Eigen::Matrix3d& r0 = moving.spawns[0].entity.rotation;
+        const Eigen::Matrix3d& r1 = turned.spawns[0].entity.rotation;
+        for (int c = 0; c < 3; ++c) {
+            CHECK(r1(0, c) == -r0(1, c));
+            CHECK(r1(1, c) == r0(0, c));
+            CHECK(r1(2, c) == r0(2, c));
+        }
+        CHECK(turned.hz == moving.hz);
+        CHECK(turned.impulse->atS == moving.impulse->atS);
+    }
+    SECTION("turns that add up to 360° give the setup back") {
+        sim::StressSetup quarters = setup, thirds = setup;
+        for (int i = 0; i < 4; ++i) quarters = sim::yawedSetup(quarters, 90);
+        for (int i = 0; i < 3; ++i) thirds = sim::yawedSetup(thirds, 120);
+        CHECK(sameTransform(quarters.spawns[0].entity, setup.spawns[0].entity, 0)); // quarter turns are exact
+        CHECK(sameTransform(thirds.spawns[0].entity, setup.spawns[0].entity, 1e-12));
+        CHECK((thirds.impulse->impulseNs - setup.impulse->impulseNs).norm() < 1e-9);
+        CHECK(sameTransform(sim::yawedSetup(setup, 360).spawns[0].entity, setup.spawns[0].entity, 0));
+    }
+}
+
+TEST_CASE("stress yaws: the matrix runs every cell at N yaws and counts what passed", "[sim][stress]") {
+    const std::vector<const sim::StressScenario*> tiny = {sim::findStressScenario("tiny-bodies")};
+    const sim::StressSetup setup = setupOf("tiny-bodies");
+    const std::vector<sim::StressMethod> methods = {method("raw"), method("default")};
+
+    SECTION("one yaw is the scenario as built") {
+        const auto results = sim::runStressMatrix(tiny, methods, {}, {}, 2, 1);
+        REQUIRE(results.size() == 2);
+        for (std::size_t m = 0; m < methods.size(); ++m) {
+            const sim::StressResult plain = sim::runStress(setup, methods[m]);
+            CHECK(results[m].yawDeg == 0);
+            CHECK(results[m].cause == plain.cause);
+            CHECK(results[m].failedAtS == plain.failedAtS);
+            CHECK(results[m].restAtS == plain.restAtS);
+            CHECK(results[m].simulatedS == plain.simulatedS);
+            CHECK(results[m].maxAnchorErrorM == plain.maxAnchorErrorM);
+            CHECK(results[m].maxLimitOvershootDeg == plain.maxLimitOvershootDeg);
+        }
+        // A cell of one run reads as before: "ok", or the cause and time.
+        const std::vector<sim::StressCell> cells = sim::stressCells(results);
+        REQUIRE(cells.size() == 2);
+        const sim::StressResult& raw = results[0];
+        CHECK(sim::stressCellText(cells[1], results) == "ok");
+        if (!raw.passed()) {
+            char expected[64];
+            std::snprintf(expected, sizeof expected, "%s %.2fs", std::string(sim::toString(raw.cause)).c_str(),
+                          raw.failedAtS.value_or(0));
+            CHECK(sim::stressCellText(cells[0], results) == expected);
+        }
+    }
+
+    SECTION("four yaws: runs at 0, 90, 180 and 270°, each the run of the turned setup, counted per cell") {
+        const auto results = sim::runStressMatrix(tiny, methods, {}, {}, 2, 4);
+        REQUIRE(results.size() == 8);
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            INFO(i);
+            CHECK(results[i].scenario == "tiny-bodies");
+            CHECK(results[i].method == methods[i / 4].label);
+            CHECK(results[i].yawDeg == 90.0 * static_cast<double>(i % 4));
+        }
+        // The run at 90° with raw is a plain run of the setup turned by 90°.
+        const sim::StressResult turned = sim::runStress(sim::yawedSetup(setup, 90), methods[0]);
+        CHECK(results[1].cause == turned.cause);
+        CHECK(results[1].failedAtS == turned.failedAtS);
+        CHECK(results[1].maxLimitOvershootDeg == turned.maxLimitOvershootDeg);
+        // Thread count does not matter.
+        const auto single = sim::runStressMatrix(tiny, methods, {}, {}, 1, 4);
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            CHECK(single[i].cause == results[i].cause);
+            CHECK(single[i].simulatedS == results[i].simulatedS);
+            CHECK(single[i].maxAnchorErrorM == results[i].maxAnchorErrorM);
+        }
+
+        const std::vector<sim::StressCell> cells = sim::stressCells(results);
+        REQUIRE(cells.size() == 2);
+        const std::string table = sim::stressTable(results, methods);
+        for (std::size_t m = 0; m < 2; ++m) {
+            const sim::StressCell& c = cells[m];
+            INFO(c.method);
+            CHECK(c.method == methods[m].label);
+            CHECK(c.total == 4);
+            int passed = 0;
+            std::map<sim::StressCause, int> causes;
+            std::optional<std::size_t> first;
+            for (std::size_t k = 0; k < 4; ++k) {
+                const sim::StressResult& r = results[m * 4 + k];
+                if (r.passed()) ++passed;
+                else {
+                    ++causes[r.cause];
+                    if (!first) first = m * 4 + k;
+                }
+            }
+            CHECK(c.passed == passed);
+            CHECK(c.firstFailure == first);
+            CHECK(c.causes.size() == causes.size());
+            for (const auto& [cause, count] : c.causes) CHECK(causes[cause] == count);
+            for (std::size_t i = 1; i < c.causes.size(); ++i) CHECK(c.causes[i - 1].second >= c.causes[i].second);
+            // "k/4", then "(cause n, ...)" when any failed; the table shows it.
+            std::string text = sim::stressCellText(c, results);
+            CHECK(text.rfind(std::to_string(passed) + "/4", 0) == 0);
+            CHECK((text.find('(') != std::string::npos) == (passed < 4));
+            for (const auto& [cause, count] : causes)
+                CHECK(text.find(std::string(sim::toString(cause)) + " " + std::to_string(count)) != std::string::npos);
+            CHECK(table.find(text) != std::string::npos);
+        }
+        CHECK(cells[1].passed == 4); // default passes tiny-bodies at every quarter turn
+        // stress.md lists every failing run with its yaw; stress.json has the yaw count, the cells and the runs.
+        const std::string md = sim::stressMarkdown(results, methods, {});
+        CHECK(md.find("| yaw ° |") != std::string::npos);
+        for (const sim::StressResult& r : results)
+            if (!r.passed()) {
+                char row[64];
+                std::snprintf(row, sizeof row, "| tiny-bodies | `raw` | %.1f | %s |", r.yawDeg,
+                              std::string(sim::toString(r.cause)).c_str());
+                CHECK(md.find(row) != std::string::npos);
+            }
+        const std::string json = sim::stressJson(results, methods, {});
+        CHECK(json.find("\"yaws\": 4") != std::string::npos);
+        CHECK(json.find("\"yaw_deg\": 270.0") != std::string::npos);
+        CHECK(json.find("\"total\": 4") != std::string::npos);
+    }
+}
+
+TEST_CASE("stress yaws: a chain dropped level rests the same way at every yaw", "[sim][stress]") {
+    // Gravity and the ground are symmetric about the vertical: an 8-link chain dropped level onto the ground passes
+    // at every yaw, resting at nearly the same time (float rounding differs with the orientation, no more).
+    sim::StressSetup level = setupOf("chain-mass-1");
+    level.spawns[0].entity.rotation.setIdentity();
+    const sim::StressMethod def = method("default");
+    const sim::StressResult at0 = sim::runStress(level, def);
+    REQUIRE(at0.passed());
+    REQUIRE(at0.restAtS);
+    for (double yaw : {45.0, 90.0, 200.0}) {
+        INFO(yaw);
+        const sim::StressResult r = sim::runStress(sim::yawedSetup(level, yaw), def);
+        CHECK(r.passed());
+        REQUIRE(r.restAtS);
+        CHECK(*r.restAtS == Approx(*at0.restAtS).margin(0.1));
+        CHECK(r.maxSpeedMps == Approx(at0.maxSpeedMps).margin(0.05));
+    }
 }
 
 namespace {

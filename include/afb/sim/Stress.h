@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -81,6 +82,12 @@ struct StressSetup {
     double spawnGraceS = 0;
 };
 
+/// `setup` turned about the world vertical (Z, through the origin) by `yawDeg`: every spawn's entity transform
+/// (rotation and position), its linear and angular velocity, and the impulse. Gravity and the ground (z = 0) are
+/// unchanged by such a turn, so a run of the turned setup differs only by its orientation in the world. Yaw 0 is the
+/// setup unchanged, bit for bit; multiples of 90° use exact sines and cosines.
+StressSetup yawedSetup(const StressSetup& setup, double yawDeg);
+
 /// Figures of the content a scenario may use; built from the bundled content (`afb stress --base`).
 struct StressContent {
     std::optional<figure::Figure> humanoid; ///< the bundled humanoid (entity "humanoid")
@@ -118,10 +125,12 @@ inline constexpr double kStressClampAngularRadps = 30.0;
 /// Parses a StressMethod spec ("default", "fast:substeps=2+stabilize+clamp"); nullopt with `error` set on a bad one.
 std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string& error);
 
-/// One cell of the matrix: a scenario run with a method until it fails, comes to rest or reaches restWithinS.
+/// One run of the matrix: a scenario, turned by a yaw, run with a method until it fails, comes to rest or reaches
+/// restWithinS.
 struct StressResult {
     std::string scenario;
     std::string method; ///< the method's label (ChartMethod::label)
+    double yawDeg = 0;  ///< the turn of the scenario about the world vertical (yawedSetup), degrees
     StressCause cause = StressCause::None;
     std::optional<double> failedAtS; ///< time of the first failure
     std::string detail;              ///< what failed: the body, joint or pair and the value
@@ -137,21 +146,40 @@ struct StressResult {
 /// Runs one setup with one method (a preset or raw, with any knob overrides). Deterministic for a given build.
 StressResult runStress(const StressSetup& setup, const StressMethod& method, const StressThresholds& thresholds = {});
 
-/// Runs every scenario with every method on `threads` worker threads (each run its own world, so results do not
-/// depend on the thread count); scenarios whose figures are missing from `content` are Skipped. Results in
-/// scenario-major order. `progress(done, total)` is called from the calling thread.
+/// Runs every scenario with every method at `yaws` orientations (run k turned by k·360°/yaws, yawedSetup; 1: the
+/// scenario as built) on `threads` worker threads (each run its own world, so results do not depend on the thread
+/// count); scenarios whose figures are missing from `content` are Skipped. Results in scenario-major, then method,
+/// then yaw order. `progress(done, total)` (in runs) is called from the calling thread.
 std::vector<StressResult> runStressMatrix(const std::vector<const StressScenario*>& scenarios,
                                           const std::vector<StressMethod>& methods, const StressContent& content,
-                                          const StressThresholds& thresholds = {}, int threads = 2,
+                                          const StressThresholds& thresholds = {}, int threads = 2, int yaws = 1,
                                           const std::function<void(int done, int total)>& progress = {});
 
-/// The matrix as a fixed-width terminal table: one row per scenario, one column per method, "ok" or the cause and
-/// the time of the first failure.
+/// One cell of the matrix: the runs of a scenario with a method at every yaw, summed up.
+struct StressCell {
+    std::string scenario;
+    std::string method;
+    int passed = 0; ///< runs that passed
+    int total = 0;  ///< runs (the yaw count); Skipped runs count here and in `causes`
+    /// The failures' causes with how many runs failed of each, most frequent first (ties in StressCause order).
+    std::vector<std::pair<StressCause, int>> causes;
+    std::optional<std::size_t> firstFailure; ///< index (into the results) of the lowest-yaw failing run
+    bool skipped() const { return !causes.empty() && causes.front().first == StressCause::Skipped; }
+};
+/// The cells of `results` (runStressMatrix's order), scenario-major, then method.
+std::vector<StressCell> stressCells(const std::vector<StressResult>& results);
+
+/// A cell as the table shows it: a cell of one run "ok" or the cause and the time of the failure ("jitter 30.00s");
+/// of N runs "k/N" passed, then the failures' causes with their counts ("5/8 (jitter 2, limit 1)"); skipped "-".
+std::string stressCellText(const StressCell& cell, const std::vector<StressResult>& results);
+
+/// The matrix as a fixed-width terminal table: one row per scenario, one column per method, stressCellText.
 std::string stressTable(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods);
-/// stress.md: the thresholds, the matrix, and every failure with its detail.
+/// stress.md: the thresholds, the matrix, and every failing run with its yaw and detail.
 std::string stressMarkdown(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                            const StressThresholds& thresholds);
-/// stress.json: thresholds, methods (every knob) and one object per cell.
+/// stress.json: the yaw count, thresholds, methods (every knob), one object per cell (passed/total, causes, the
+/// first failing run) and one per run (with its yaw).
 std::string stressJson(const std::vector<StressResult>& results, const std::vector<StressMethod>& methods,
                        const StressThresholds& thresholds);
 
