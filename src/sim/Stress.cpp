@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <time.h>
 
+#include "RestWindow.h"
 #include "afb/bullet/Convert.h"
 #include "afb/figure/Stabilize.h"
 #include "afb/sim/Drop.h"
@@ -155,8 +156,8 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
     const double dt = 1.0 / setup.hz;
     const int steps = static_cast<int>(std::ceil(th.restWithinS * setup.hz - 1e-9));
     const int lastSecondFrom = steps - static_cast<int>(std::lround(setup.hz));
-    double restStart = 0, lastSecondSpin = 0, windowSpin = 0;
-    std::string windowSpinBody;
+    double lastSecondSpin = 0;
+    detail::RestWindow rest(th);
     std::vector<btTransform> window = framesOf(dolls);
     std::string lastSecondSpinBody;
     Judge judge{th, r};
@@ -206,13 +207,8 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
                     lastSecondSpin = spin;
                     lastSecondSpinBody = bodyLabel(dolls, k, body);
                 }
-                // A rest window's spin counts from its second half: its first steps belong to the settling of
-                // the motion that ended just before (a link landing flat spins down over a few steps, turning
-                // less than the rest bound).
-                if (spin > windowSpin && judge.now - restStart >= th.restWindowS / 2 - 1e-9) {
-                    windowSpin = spin;
-                    windowSpinBody = bodyLabel(dolls, k, body);
-                }
+                if (rest.counts(judge.now) && spin > rest.worstSpin())
+                    rest.spin(judge.now, spin, bodyLabel(dolls, k, body));
             }
             for (int c = 0; c < static_cast<int>(d.figure().constraints.size()) && !judge.failed(); ++c) {
                 const bullet::JointError e = d.jointError(c);
@@ -243,16 +239,17 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
         if (gain > th.maxEnergyGainJ) judge.fail(StressCause::EnergyGain, "+" + fixed(gain, 1) + " J");
         if (judge.failed()) break;
         // Rest: a window of restWindowS over which nothing moved; a body that moved starts a new one now.
-        if (!impulseDone || !stillSince(dolls, window, th)) {
-            restStart = judge.now;
-            window = framesOf(dolls);
-            windowSpin = 0;
-        } else if (judge.now - restStart >= th.restWindowS - 1e-9) {
-            // Still, but are the velocities? A body held in place while it reports a spin is jitter.
-            if (windowSpin > th.maxResidualSpinRadps)
-                judge.fail(StressCause::Jitter,
-                           windowSpinBody + " turning at " + fixed(windowSpin, 1) + " rad/s while at rest");
-            else r.restAtS = restStart;
+        const bool still = impulseDone && stillSince(dolls, window, th);
+        if (!still) window = framesOf(dolls);
+        const detail::RestWindow::Verdict verdict = rest.update(judge.now, still);
+        if (verdict == detail::RestWindow::Verdict::Jitter) {
+            // Still, but a body held in place reports a spin.
+            judge.fail(StressCause::Jitter,
+                       rest.worstBody() + " turning at " + fixed(rest.worstSpin(), 1) + " rad/s while at rest");
+            return;
+        }
+        if (verdict == detail::RestWindow::Verdict::Rested) {
+            r.restAtS = rest.start();
             return;
         }
     }

@@ -13,6 +13,7 @@
 #include "afb/bullet/Convert.h"
 #include "afb/sim/Scene.h"
 #include "afb/sim/Stress.h"
+#include "sim/RestWindow.h"
 
 using namespace afb;
 
@@ -110,6 +111,55 @@ TEST_CASE("stress: the detector reports the first failure with its documented ca
         th.maxEnergyGainJ = -1;
         const sim::StressResult r = sim::runStress(setupOf("chain-mass-1"), def, th);
         CHECK(r.cause == sim::StressCause::EnergyGain);
+    }
+}
+
+TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim][stress]") {
+    // Steps of 1/60 s, bounds as documented: 1 s windows, 1 rad/s. A body spinning down in the window's first
+    // steps (the settling of the motion before it) is at rest; a body still reporting a spin in its second half
+    // while nothing moves is jitter; a move starts a new window.
+    const sim::StressThresholds th;
+    constexpr double dt = 1.0 / 60;
+    using Verdict = sim::detail::RestWindow::Verdict;
+    // Runs steps 1..n: spins[t] is reported at that time; returns the first verdict that is not Open.
+    auto run = [&](auto spinAt, auto stillAt, int n) {
+        sim::detail::RestWindow w(th);
+        for (int i = 1; i <= n; ++i) {
+            const double now = i * dt;
+            w.spin(now, spinAt(now), "arm");
+            const Verdict v = w.update(now, stillAt(now));
+            if (v != Verdict::Open) return std::tuple{v, now, w.start(), w.worstSpin()};
+        }
+        return std::tuple{Verdict::Open, n * dt, w.start(), w.worstSpin()};
+    };
+    auto always = [](double) { return true; };
+    SECTION("a spin of 2 rad/s over the first 0.1 s, then calm: at rest from 0, after 1 s") {
+        const auto [v, at, start, worst] = run([](double t) { return t < 0.1 ? 2.0 : 0.01; }, always, 120);
+        CHECK(v == Verdict::Rested);
+        CHECK(at == Approx(1.0));
+        CHECK(start == 0);
+        CHECK(worst == Approx(0.01));
+    }
+    SECTION("a spin of 2 rad/s at 0.6 s while nothing moves: jitter at the window's end") {
+        const auto [v, at, start, worst] =
+            run([](double t) { return std::abs(t - 0.6) < dt / 2 ? 2.0 : 0.0; }, always, 120);
+        CHECK(v == Verdict::Jitter);
+        CHECK(at == Approx(1.0));
+        CHECK(worst == Approx(2.0));
+    }
+    SECTION("a move at 0.3 s starts a new window: its settling spin at 0.4 s does not count") {
+        const auto [v, at, start, worst] = run([](double t) { return std::abs(t - 0.4) < dt / 2 ? 3.0 : 0.0; },
+                                               [](double t) { return std::abs(t - 0.3) >= dt / 2; }, 120);
+        CHECK(v == Verdict::Rested);
+        CHECK(start == Approx(0.3));
+        CHECK(at == Approx(1.3));
+    }
+    SECTION("a spin just over the bound in the second half of the new window is jitter") {
+        const auto [v, at, start, worst] = run([](double t) { return std::abs(t - 0.9) < dt / 2 ? 1.1 : 0.0; },
+                                               [](double t) { return std::abs(t - 0.3) >= dt / 2; }, 120);
+        CHECK(v == Verdict::Jitter);
+        CHECK(start == Approx(0.3));
+        CHECK(worst == Approx(1.1));
     }
 }
 
