@@ -127,9 +127,6 @@ std::optional<Method> methodPreset(std::string_view name) {
         // impact without a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm.
         m.directJoints = true;
         m.positionTree = 1;
-        // Velocities as the direct solve made them: taking back what the pass reverts made exact's 1 m limits and
-        // peaks worse (3.4° → 3.8°, 6 → 10 mm), for 12 more of 136 stress runs (README: Methods point 12).
-        m.positionVelocity = false;
         return m;
     }
     if (name == "multibody") {
