@@ -337,7 +337,8 @@ const StressScenario* findStressScenario(std::string_view name) {
 }
 
 std::vector<std::string_view> stressCiScenarios() {
-    return {"chain-mass-100", "chain-mass-1000", "rope-30", "heavy-weight", "tiny-bodies", "humanoid-projectile"};
+    return {"chain-mass-100",    "chain-mass-1000",    "rope-30", "heavy-weight", "tiny-bodies",
+            "humanoid-drop-10m", "humanoid-projectile"};
 }
 
 } // namespace afb::sim
