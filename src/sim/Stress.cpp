@@ -539,7 +539,8 @@ std::string stressMarkdown(const std::vector<StressResult>& results, const std::
                       fixed(th.maxPenetrationM * 100, 0) + " cm after " + fixed(th.penetrationAfterS, 0) +
                       " s), energy (a gain over " + fixed(th.maxEnergyGainJ, 0) +
                       " J beyond external work), jitter (a body reporting over " + fixed(th.maxResidualSpinRadps, 0) +
-                      " rad/s in the rest window, or in the last second of a run that never rests), no-rest.\n\n";
+                      " rad/s in the second half of the rest window, or in the last second of a run that never rests), "
+                      "no-rest.\n\n";
     const std::vector<StressCell> cells = stressCells(results);
     const int yaws = yawCount(cells);
     if (yaws > 1)
