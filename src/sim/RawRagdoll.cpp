@@ -38,6 +38,7 @@ bullet::Method rawMethod() {
     m.jointWarmStarting = false;
     m.limitWarmStarting = false;
     m.positionVelocity = false;
+    m.mergeFixed = false;
     return m;
 }
 
@@ -54,6 +55,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.speculativeLimits) knobs += " speculative-limits";
     if (m.jointWarmStarting) knobs += " joint-warm-starting";
     if (m.limitWarmStarting) knobs += " limit-warm-starting";
+    if (m.mergeFixed) knobs += " merge-fixed";
     if (knobs.empty()) return {};
     return "method raw (plain Bullet) has no" + knobs + ": leave them off";
 }

@@ -60,6 +60,9 @@ TEST_CASE("raw: the method is Bullet's defaults and none of afbullet's technique
     bullet::Method wrong = m;
     wrong.positionIterations = 2;
     CHECK(sim::rawMethodError(wrong).find("position-iterations") != std::string::npos);
+    bullet::Method merged = m; // RawRagdoll builds one btRigidBody per figure body, always
+    merged.mergeFixed = true;
+    CHECK(sim::rawMethodError(merged).find("merge-fixed") != std::string::npos);
     CHECK(sim::methodByName("raw") == m);
     CHECK(sim::methodByName("default") == bullet::methodPreset("default"));
     CHECK_FALSE(sim::methodByName("nonsense"));
