@@ -83,6 +83,12 @@ constexpr auto kBackward = backwardTable(std::make_integer_sequence<int, kUnroll
 
 bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
     const std::size_t n = dims.size();
+    // The same layout as last time (a figure's joints from step to step): only the blocks need zeroing.
+    if (n == m_dim.size() && parent.size() == n && m_order.size() == n && std::ranges::equal(dims, m_dim) &&
+        std::ranges::equal(parent, m_parent)) {
+        std::fill(m_blocks.begin(), m_blocks.end(), 0.0);
+        return true;
+    }
     m_dim.assign(dims.begin(), dims.end());
     m_parent.assign(parent.begin(), parent.end());
     m_offset.assign(n, 0);
@@ -90,6 +96,7 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
     m_edgeAt.assign(n, 0);
     m_gainAt.assign(n, 0);
     m_order.clear();
+    m_steps.clear();
     m_size = 0;
     if (parent.size() != n) return false;
     std::size_t blocks = 0, gains = 0;
@@ -111,10 +118,13 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
     m_blocks.assign(blocks, 0.0);
     m_gain.assign(gains, 0.0);
     // Post-order from every root: children before their parent. A node on a cycle is never reached.
-    std::vector<std::vector<int>> children(n);
+    std::vector<std::vector<int>>& children = m_children;
+    if (children.size() < n) children.resize(n);
+    for (std::size_t i = 0; i < n; ++i) children[i].clear();
     for (std::size_t i = 0; i < n; ++i)
         if (m_parent[i] >= 0) children[static_cast<std::size_t>(m_parent[i])].push_back(static_cast<int>(i));
-    std::vector<std::pair<int, std::size_t>> stack;
+    std::vector<std::pair<int, std::size_t>>& stack = m_stack;
+    stack.clear();
     for (std::size_t r = 0; r < n; ++r) {
         if (m_parent[r] >= 0) continue;
         stack.push_back({static_cast<int>(r), 0});
@@ -130,16 +140,27 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
             }
         }
     }
-    return m_order.size() == n;
+    if (m_order.size() != n) return false;
+    for (const int i : m_order) {
+        const std::size_t k = static_cast<std::size_t>(i);
+        const int p = m_parent[k];
+        const std::size_t q = p < 0 ? 0 : static_cast<std::size_t>(p);
+        m_steps.push_back({m_dim[k], p < 0 ? 0 : m_dim[q], m_offset[k], p < 0 ? 0 : m_offset[q], m_diagAt[k],
+                           m_edgeAt[k], m_gainAt[k]});
+    }
+    return true;
 }
 
 namespace {
 
 // The inverse of a symmetric definite (positive or negative) d × d matrix `a`, row-major, by LDLᵀ without
-// pivoting (a definite matrix needs none). False when a pivot is zero or not finite.
-bool invertDefinite(const double* a, int d, double* inverse) {
-    double l[kMaxDim * kMaxDim] = {};
-    double diag[kMaxDim];
+// pivoting (a definite matrix needs none). False when a pivot is zero or not finite. `a` is read only until the
+// inverse is written, so the two may be the same block. D > 0: a fixed size (unrolled), D = 0: `n`.
+template <int D>
+bool invertDefinite(const double* a, int n, double* inverse) {
+    const int d = D > 0 ? D : n;
+    double l[(D > 0 ? D : kMaxDim) * (D > 0 ? D : kMaxDim)]; // only its strict lower triangle is used
+    double diag[D > 0 ? D : kMaxDim];
     for (int j = 0; j < d; ++j) {
         double dj = a[j * d + j];
         for (int k = 0; k < j; ++k) dj -= l[j * d + k] * l[j * d + k] * diag[k];
@@ -153,7 +174,7 @@ bool invertDefinite(const double* a, int d, double* inverse) {
     }
     // Column c of the inverse: L y = e_c, y /= D, Lᵀ x = y.
     for (int c = 0; c < d; ++c) {
-        double y[kMaxDim];
+        double y[D > 0 ? D : kMaxDim];
         for (int i = 0; i < d; ++i) {
             double v = i == c ? 1.0 : 0.0;
             for (int k = 0; k < i; ++k) v -= l[i * d + k] * y[k];
@@ -171,68 +192,94 @@ bool invertDefinite(const double* a, int d, double* inverse) {
     return true;
 }
 
+// One child's elimination: G = D⁻¹ E (the backward pass's gain), and the parent's pivot loses Eᵀ G. D, P > 0:
+// fixed sizes (unrolled), 0: `dn`, `pn`.
+template <int D, int P>
+void eliminate(const double* inverse, const double* e, double* g, double* parentPivot, int dn, int pn) {
+    const int d = D > 0 ? D : dn, dp = P > 0 ? P : pn;
+    for (int r = 0; r < d; ++r)
+        for (int c = 0; c < dp; ++c) {
+            double v = 0;
+            for (int q = 0; q < d; ++q) v += inverse[r * d + q] * e[q * dp + c];
+            g[r * dp + c] = v;
+        }
+    for (int r = 0; r < dp; ++r)
+        for (int c = 0; c < dp; ++c) {
+            double v = 0;
+            for (int q = 0; q < d; ++q) v += e[q * dp + r] * g[q * dp + c];
+            parentPivot[r * dp + c] -= v;
+        }
+}
+
+using Invert = bool (*)(const double*, int, double*);
+using Eliminate = void (*)(const double*, const double*, double*, double*, int, int);
+
+template <int... D>
+constexpr std::array<Invert, sizeof...(D)> invertTable(std::integer_sequence<int, D...>) {
+    return {&invertDefinite<D + 1>...};
+}
+template <int D, int... P>
+constexpr std::array<Eliminate, sizeof...(P)> eliminateRow(std::integer_sequence<int, P...>) {
+    return {&eliminate<D + 1, P + 1>...};
+}
+template <int... D>
+constexpr auto eliminateTable(std::integer_sequence<int, D...>) {
+    return std::array{eliminateRow<D>(std::make_integer_sequence<int, kUnrolled>{})...};
+}
+// [d − 1], [d − 1][dp − 1]: d, dp in 1…6.
+constexpr auto kInvert = invertTable(std::make_integer_sequence<int, kUnrolled>{});
+constexpr auto kEliminate = eliminateTable(std::make_integer_sequence<int, kUnrolled>{});
+
 } // namespace
 
 bool BlockTree::factor() {
     if (m_order.size() != m_dim.size()) return false;
-    double inverse[kMaxDim * kMaxDim];
     for (const int i : m_order) {
         const std::size_t k = static_cast<std::size_t>(i);
         const int d = m_dim[k];
         double* pivot = m_blocks.data() + m_diagAt[k];
-        if (!invertDefinite(pivot, d, inverse)) return false;
-        std::copy(inverse, inverse + d * d, pivot);
+        const bool inverted = d <= kUnrolled ? kInvert[static_cast<std::size_t>(d - 1)](pivot, d, pivot)
+                                             : invertDefinite<0>(pivot, d, pivot);
+        if (!inverted) return false;
         const int p = m_parent[k];
         if (p < 0) continue;
         const int dp = m_dim[static_cast<std::size_t>(p)];
         const double* e = m_blocks.data() + m_edgeAt[k];
         double* g = m_gain.data() + m_gainAt[k];
-        // G = D⁻¹ E (the backward pass's gain); the parent's pivot loses Eᵀ G.
-        for (int r = 0; r < d; ++r)
-            for (int c = 0; c < dp; ++c) {
-                double v = 0;
-                for (int q = 0; q < d; ++q) v += pivot[r * d + q] * e[q * dp + c];
-                g[r * dp + c] = v;
-            }
         double* parentPivot = m_blocks.data() + m_diagAt[static_cast<std::size_t>(p)];
-        for (int r = 0; r < dp; ++r)
-            for (int c = 0; c < dp; ++c) {
-                double v = 0;
-                for (int q = 0; q < d; ++q) v += e[q * dp + r] * g[q * dp + c];
-                parentPivot[r * dp + c] -= v;
-            }
+        if (d <= kUnrolled && dp <= kUnrolled)
+            kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot, d,
+                                                                                          dp);
+        else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
     }
     return true;
 }
 
 void BlockTree::solve(double* x) const {
+    const double* blocks = m_blocks.data();
     // Forward (L z = b) and diagonal (w = D⁻¹ z): children first, each hands its part to its parent. A node
     // whose part is still zero hands nothing (a right-hand side at one body touches only its path to the root).
-    for (const int i : m_order) {
-        const std::size_t k = static_cast<std::size_t>(i);
-        const int d = m_dim[k];
-        double* xi = x + m_offset[k];
+    for (const Step& s : m_steps) {
+        const int d = s.dim, dp = s.parentDim;
+        double* xi = x + s.offset;
         bool zero = true;
         for (int r = 0; r < d && zero; ++r) zero = xi[r] == 0.0;
         if (zero) continue;
-        const int p = m_parent[k];
-        const int dp = p < 0 ? 0 : m_dim[static_cast<std::size_t>(p)];
-        double* xp = p < 0 ? nullptr : x + m_offset[static_cast<std::size_t>(p)];
-        const double* inverse = m_blocks.data() + m_diagAt[k];
-        const double* e = m_blocks.data() + m_edgeAt[k];
+        double* xp = dp == 0 ? nullptr : x + s.parentOffset;
+        const double* inverse = blocks + s.diagAt;
+        const double* e = blocks + s.edgeAt;
         if (d <= kUnrolled && dp <= kUnrolled)
             kForward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](inverse, e, xi, xp);
         else forwardAny(d, dp, inverse, e, xi, xp);
     }
     // Backward (Lᵀ x = w): parents first, x_i −= G_i x_p.
-    for (auto it = m_order.rbegin(); it != m_order.rend(); ++it) {
-        const std::size_t k = static_cast<std::size_t>(*it);
-        const int p = m_parent[k];
-        if (p < 0) continue;
-        const int d = m_dim[k], dp = m_dim[static_cast<std::size_t>(p)];
-        const double* g = m_gain.data() + m_gainAt[k];
-        const double* xp = x + m_offset[static_cast<std::size_t>(p)];
-        double* xi = x + m_offset[k];
+    for (auto it = m_steps.rbegin(); it != m_steps.rend(); ++it) {
+        const Step& s = *it;
+        const int d = s.dim, dp = s.parentDim;
+        if (dp == 0) continue;
+        const double* g = m_gain.data() + s.gainAt;
+        const double* xp = x + s.parentOffset;
+        double* xi = x + s.offset;
         if (d <= kUnrolled && dp <= kUnrolled)
             kBackward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](g, xp, xi);
         else backwardAny(d, dp, g, xp, xi);

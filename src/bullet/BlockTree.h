@@ -4,6 +4,7 @@
 #pragma once
 
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace afb::bullet {
@@ -37,9 +38,17 @@ class BlockTree {
     void solve(double* x) const;
 
   private:
+    // What solve() needs of a node, in m_order (parentDim 0: a root).
+    struct Step {
+        int dim, parentDim, offset, parentOffset;
+        std::size_t diagAt, edgeAt, gainAt;
+    };
+    std::vector<Step> m_steps;
     std::vector<int> m_dim, m_parent, m_offset, m_order; // m_order: every node after its children
     std::vector<std::size_t> m_diagAt, m_edgeAt, m_gainAt;
-    std::vector<double> m_blocks, m_gain; // m_gain: D_i⁻¹ H_{i,p(i)} per edge, after factor()
+    std::vector<double> m_blocks, m_gain;             // m_gain: D_i⁻¹ H_{i,p(i)} per edge, after factor()
+    std::vector<std::vector<int>> m_children;         // reset()'s scratch, kept for its capacity
+    std::vector<std::pair<int, std::size_t>> m_stack; // (node, next child)
     int m_size = 0;
 };
 

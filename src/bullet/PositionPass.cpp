@@ -265,11 +265,13 @@ class JointTree {
         btScalar error[5];
     };
     // Lays the tree out once per pass from the joints' endpoints; false when there is nothing to solve.
-    bool build(std::vector<Joint> joints, int bodies) {
+    bool build(std::span<const Joint> joints, int bodies) {
         m_bodies = bodies;
-        std::vector<int> root(static_cast<std::size_t>(bodies));
+        std::vector<int>& root = m_root;
+        root.resize(static_cast<std::size_t>(bodies));
         std::iota(root.begin(), root.end(), 0);
-        std::vector<char> grounded(static_cast<std::size_t>(bodies), 0);
+        std::vector<char>& grounded = m_grounded;
+        grounded.assign(static_cast<std::size_t>(bodies), 0);
         const auto find = [&](int i) {
             while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)];
             return i;
@@ -294,12 +296,15 @@ class JointTree {
         // Parents: a grounded tree hangs from its world joint, any other from its first body.
         const int nodes = bodies + static_cast<int>(m_joints.size());
         m_parent.assign(static_cast<std::size_t>(nodes), -2);
-        std::vector<std::vector<int>> jointsAt(static_cast<std::size_t>(bodies));
+        std::vector<std::vector<int>>& jointsAt = m_jointsAt;
+        if (jointsAt.size() < static_cast<std::size_t>(bodies)) jointsAt.resize(static_cast<std::size_t>(bodies));
+        for (auto& at : jointsAt) at.clear();
         for (std::size_t k = 0; k < m_joints.size(); ++k) {
             if (m_joints[k].a >= 0) jointsAt[static_cast<std::size_t>(m_joints[k].a)].push_back(static_cast<int>(k));
             if (m_joints[k].b >= 0) jointsAt[static_cast<std::size_t>(m_joints[k].b)].push_back(static_cast<int>(k));
         }
-        std::vector<int> stack;
+        std::vector<int>& stack = m_stack;
+        stack.clear();
         auto hang = [&](int body) { // everything reachable from `body`, whose parent is already set
             stack.push_back(body);
             while (!stack.empty()) {
@@ -438,6 +443,9 @@ class JointTree {
 
     int m_bodies = 0;
     std::vector<Joint> m_joints;
+    std::vector<int> m_root, m_stack; // build()'s scratch
+    std::vector<char> m_grounded;
+    std::vector<std::vector<int>> m_jointsAt;
     std::vector<int> m_parent, m_dims;
     std::vector<Rows> m_rows, m_after;
     std::vector<Side> m_saved;
@@ -445,13 +453,32 @@ class JointTree {
     std::vector<double> m_rhs;
 };
 
+// One contact manifold touching the ragdoll, with its sides (null: immovable).
+struct ContactSides {
+    btPersistentManifold* manifold;
+    Side* a;
+    Side* b;
+};
+
+// The pass's buffers, kept from call to call for their capacity: one set per thread, since worlds (each on one
+// thread) may step concurrently.
+struct Scratch {
+    std::vector<Side> bodies;
+    std::vector<ContactSides> contacts;
+    std::vector<JointTree::Joint> joints;
+    JointTree tree;
+};
+thread_local Scratch t_scratch;
+
 } // namespace
 
 void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentManifold* const> manifolds, btScalar dt,
                   bool takeVelocity) {
     const figure::Figure& f = r.figure();
-    std::vector<Side> bodies;
+    Scratch& scratch = t_scratch;
+    std::vector<Side>& bodies = scratch.bodies;
     // One side per Bullet rigid body (figure bodies merged by Method::mergeFixed share one).
+    bodies.clear();
     bodies.reserve(static_cast<std::size_t>(r.rigidBodyCount()));
     for (int i = 0; i < r.rigidBodyCount(); ++i) bodies.push_back(sideOf(&r.rigidBody(i)));
     Side world;
@@ -461,12 +488,8 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
             if (static_cast<const btCollisionObject*>(&r.rigidBody(static_cast<int>(i))) == o) return &bodies[i];
         return nullptr;
     };
-    struct ContactSides {
-        btPersistentManifold* manifold;
-        Side* a;
-        Side* b;
-    };
-    std::vector<ContactSides> contacts;
+    std::vector<ContactSides>& contacts = scratch.contacts;
+    contacts.clear();
     for (btPersistentManifold* m : manifolds) {
         Side* a = sideFor(m->getBody0());
         Side* b = sideFor(m->getBody1());
@@ -474,9 +497,10 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
     }
     Side immovableA, immovableB;
     const btMatrix3x3 spawnBasis = r.spawnTransform().getBasis();
-    JointTree tree;
+    JointTree& tree = scratch.tree;
     const bool haveTree = treeMode > 0 && [&] {
-        std::vector<JointTree::Joint> joints;
+        std::vector<JointTree::Joint>& joints = scratch.joints;
+        joints.clear();
         for (int i = 0; i < static_cast<int>(f.constraints.size()); ++i) {
             const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(i)];
             if (c.type == figure::JointType::Spring || c.type == figure::JointType::Slider) continue;
@@ -486,7 +510,7 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
             joints.push_back({i, bodies[static_cast<std::size_t>(a)].body ? a : -1,
                               b >= 0 && bodies[static_cast<std::size_t>(b)].body ? b : -1});
         }
-        return tree.build(std::move(joints), static_cast<int>(bodies.size()));
+        return tree.build(joints, static_cast<int>(bodies.size()));
     }();
     auto rowsOf = [&](const JointTree::Joint& j) {
         const figure::FigureConstraint& c = f.constraints[static_cast<std::size_t>(j.constraint)];

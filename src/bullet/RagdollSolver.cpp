@@ -3,7 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <span>
 
 #include <Eigen/Dense>
 
@@ -67,6 +67,23 @@ struct RagdollSolver::Direct {
         Vec cfm;           // C's diagonal
         Vec lambda;        // the rows' accumulated impulses (without the reactions to free rows unless `soft`)
         bool soft = false; // a row has a cfm: its reactions are kept up to date (the block solve needs them)
+        // The tree's layout, kept from step to step while the rows join the same body pairs in the same order
+        // (a figure's joints do): `layoutKey` is the bodies' count then each row's two local bodies.
+        std::vector<int> layoutKey, dims, parent;
+        std::vector<std::vector<int>> nodeRows; // per joint node: its rows (the first pairs.size())
+        std::vector<std::pair<int, int>> pairs; // per joint node: its body pair (−1: the world)
+        std::vector<std::vector<int>> adjacent; // layOut's scratch: per node, its neighbours
+        std::vector<int> queue;
+        bool layoutTree = false; // the layout is a tree (else the dense factor is used)
+
+        // Empties the group for the next step, keeping its buffers and its layout.
+        void clear() {
+            bodies.clear();
+            rows.clear();
+            for (auto& at : rowsAt) at.clear();
+            useTree = false;
+            soft = false;
+        }
     };
     // A row solved one at a time, with its response through the groups it touches.
     struct FreeRow {
@@ -80,10 +97,14 @@ struct RagdollSolver::Direct {
         btScalar start = 0;          // the row's impulse before the iterations (warm start)
     };
 
+    static bool layOut(Group& group);
     static bool factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool, double epsilon);
 
     bool enabled = false;
+    // The groups of this step are the first `used`; the others wait, with their buffers, for a later step.
     std::vector<Group> groups;
+    std::size_t used = 0;
+    std::span<Group> live() { return {groups.data(), used}; }
     std::vector<int> groupOf, localOf; // per solver body
     std::vector<FreeRow> nonContact, contact, friction;
     std::vector<btVector3> responses; // M⁻¹-weighted velocity change per unit impulse, per group body
@@ -91,9 +112,20 @@ struct RagdollSolver::Direct {
     std::vector<double> response; // one response being computed, 6 per group body
     std::vector<double> scratch;
     std::vector<char> bilateral; // per non-contact pool row: in a group's block
+    // Per step scratch, kept for its capacity.
+    struct Column {
+        FreeRow* row;
+        int side; // the response slot (0: side A's group, which covers B too when it is the same group)
+        bool withA, withB;
+    };
+    std::vector<std::vector<Column>> columns; // per group
+    std::vector<int> unionParent, groupOfRoot;
+    std::vector<double> solveX;
+    std::vector<double> e; // one group's joint errors
 
     void clear() {
-        groups.clear();
+        for (Group& g : live()) g.clear();
+        used = 0;
         nonContact.clear();
         contact.clear();
         friction.clear();
@@ -102,27 +134,29 @@ struct RagdollSolver::Direct {
     }
 };
 
-// The group's H as a tree of body and joint nodes, factored (BlockTree). False when the group has a loop, more
-// than one joint to the world (a leaf joint's pivot would be −C, zero), a body whose inertia cannot be inverted, or
-// a pivot that is singular: the caller then factors A + C densely.
-bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool,
-                                       double epsilon) {
+// The group's tree: a node per body and per jointed body pair, rooted at the joint to the world if there is one.
+// False when the rows do not form one tree (a loop, more than one joint to the world).
+bool RagdollSolver::Direct::layOut(Group& group) {
     const int bodies = static_cast<int>(group.bodies.size());
-    std::map<std::pair<int, int>, int> nodeOf; // body pair (−1: the world) → joint node
-    std::vector<std::vector<int>> nodeRows;
-    std::vector<std::pair<int, int>> pairs;
+    // Joint nodes in the order their pairs first appear (a figure has a few dozen: a linear search is enough).
+    std::vector<std::vector<int>>& nodeRows = group.nodeRows;
+    std::vector<std::pair<int, int>>& pairs = group.pairs;
+    pairs.clear();
     for (std::size_t i = 0; i < group.rows.size(); ++i) {
         const JointRow& row = group.rows[i];
         const std::pair<int, int> key{std::min(row.bodyA, row.bodyB), std::max(row.bodyA, row.bodyB)};
-        const auto [it, added] = nodeOf.try_emplace(key, static_cast<int>(nodeRows.size()));
-        if (added) {
-            nodeRows.emplace_back();
+        const std::size_t node = static_cast<std::size_t>(std::find(pairs.begin(), pairs.end(), key) - pairs.begin());
+        if (node == pairs.size()) {
             pairs.push_back(key);
+            if (nodeRows.size() < pairs.size()) nodeRows.emplace_back();
+            nodeRows[node].clear();
         }
-        nodeRows[static_cast<std::size_t>(it->second)].push_back(static_cast<int>(i));
+        nodeRows[node].push_back(static_cast<int>(i));
     }
     const int nodes = bodies + static_cast<int>(pairs.size());
-    std::vector<std::vector<int>> adjacent(static_cast<std::size_t>(nodes));
+    std::vector<std::vector<int>>& adjacent = group.adjacent;
+    if (adjacent.size() < static_cast<std::size_t>(nodes)) adjacent.resize(static_cast<std::size_t>(nodes));
+    for (std::size_t i = 0; i < static_cast<std::size_t>(nodes); ++i) adjacent[i].clear();
     int edges = 0, root = 0, toWorld = 0;
     for (std::size_t j = 0; j < pairs.size(); ++j) {
         const int node = bodies + static_cast<int>(j);
@@ -138,7 +172,10 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
         }
     }
     if (toWorld > 1 || edges != nodes - 1) return false;
-    std::vector<int> parent(static_cast<std::size_t>(nodes), -2), queue{root};
+    std::vector<int>& parent = group.parent;
+    std::vector<int>& queue = group.queue;
+    queue.assign(1, root);
+    parent.assign(static_cast<std::size_t>(nodes), -2);
     parent[static_cast<std::size_t>(root)] = -1;
     for (std::size_t q = 0; q < queue.size(); ++q)
         for (const int next : adjacent[static_cast<std::size_t>(queue[q])])
@@ -147,9 +184,32 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
                 queue.push_back(next);
             }
     if (static_cast<int>(queue.size()) != nodes) return false;
-    std::vector<int> dims(static_cast<std::size_t>(nodes), 6);
+    group.dims.assign(static_cast<std::size_t>(nodes), 6);
     for (std::size_t j = 0; j < pairs.size(); ++j)
-        dims[static_cast<std::size_t>(bodies) + j] = static_cast<int>(nodeRows[j].size());
+        group.dims[static_cast<std::size_t>(bodies) + j] = static_cast<int>(nodeRows[j].size());
+    return true;
+}
+
+// The group's H as a tree of body and joint nodes, factored (BlockTree). False when the group has a loop, more
+// than one joint to the world (a leaf joint's pivot would be −C, zero), a body whose inertia cannot be inverted, or
+// a pivot that is singular: the caller then factors A + C densely.
+bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool,
+                                       double epsilon) {
+    const int bodies = static_cast<int>(group.bodies.size());
+    std::vector<int>& key = group.layoutKey;
+    bool same = key.size() == 1 + 2 * group.rows.size() && key[0] == bodies;
+    for (std::size_t i = 0; same && i < group.rows.size(); ++i)
+        same = key[1 + 2 * i] == group.rows[i].bodyA && key[2 + 2 * i] == group.rows[i].bodyB;
+    if (!same) {
+        key.assign(1, bodies);
+        for (const JointRow& row : group.rows) key.insert(key.end(), {row.bodyA, row.bodyB});
+        group.layoutTree = layOut(group);
+    }
+    if (!group.layoutTree) return false;
+    const std::vector<int>& dims = group.dims;
+    const std::vector<int>& parent = group.parent;
+    const std::vector<std::pair<int, int>>& pairs = group.pairs;
+    const std::vector<std::vector<int>>& nodeRows = group.nodeRows;
     BlockTree& tree = group.tree;
     if (!tree.reset(dims, parent)) return false;
     // Bodies: M = diag(m, m, m, I_world).
@@ -213,7 +273,8 @@ bool RagdollSolver::buildDirect() {
         return b.m_linearFactor == one && b.m_angularFactor == one;
     };
     // Union–find over the bodies the unbounded rows of tracked constraints join.
-    std::vector<int> parent(static_cast<std::size_t>(bodyCount));
+    std::vector<int>& parent = d.unionParent;
+    parent.resize(static_cast<std::size_t>(bodyCount));
     for (int i = 0; i < bodyCount; ++i) parent[static_cast<std::size_t>(i)] = i;
     auto root = [&](int i) {
         while (parent[static_cast<std::size_t>(i)] != i)
@@ -236,20 +297,21 @@ bool RagdollSolver::buildDirect() {
     }
     if (!any) return false;
     // Groups, their bodies and their joint rows.
-    std::vector<int> groupOfRoot(static_cast<std::size_t>(bodyCount), -1);
+    std::vector<int>& groupOfRoot = d.groupOfRoot;
+    groupOfRoot.assign(static_cast<std::size_t>(bodyCount), -1);
     auto groupFor = [&](int id) {
         const int r = root(id);
         int& g = groupOfRoot[static_cast<std::size_t>(r)];
         if (g < 0) {
-            g = static_cast<int>(d.groups.size());
-            d.groups.emplace_back();
+            g = static_cast<int>(d.used++);
+            if (d.groups.size() < d.used) d.groups.emplace_back();
         }
         if (d.groupOf[static_cast<std::size_t>(id)] < 0) {
             Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
             d.groupOf[static_cast<std::size_t>(id)] = g;
             d.localOf[static_cast<std::size_t>(id)] = static_cast<int>(group.bodies.size());
             group.bodies.push_back(id);
-            group.rowsAt.emplace_back();
+            if (group.rowsAt.size() < group.bodies.size()) group.rowsAt.emplace_back(); // else cleared
         }
         return g;
     };
@@ -275,7 +337,7 @@ bool RagdollSolver::buildDirect() {
         group.rows.push_back(row);
     }
     // A + C per group, factored: along the figure's tree when it has one, densely otherwise.
-    for (Direct::Group& group : d.groups) {
+    for (Direct::Group& group : d.live()) {
         const int n = static_cast<int>(group.rows.size());
         group.cfm.resize(n);
         double largest = 0;
@@ -334,12 +396,9 @@ bool RagdollSolver::buildDirect() {
     for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j)
         addFree(d.friction, m_tmpSolverContactFrictionConstraintPool[j], false);
     // Per group, the columns J M⁻¹ Jᵣᵀ of every free row touching it, solved in one batch: Y = (A + C)⁻¹ G.
-    struct Column {
-        Direct::FreeRow* row;
-        int side; // the response slot (0: side A's group, which covers B too when it is the same group)
-        bool withA, withB;
-    };
-    std::vector<std::vector<Column>> columns(d.groups.size());
+    std::vector<std::vector<Direct::Column>>& columns = d.columns;
+    if (columns.size() < d.used) columns.resize(d.used);
+    for (std::size_t g = 0; g < d.used; ++g) columns[g].clear();
     for (auto* list : {&d.nonContact, &d.contact, &d.friction})
         for (Direct::FreeRow& fr : *list) {
             btSolverConstraint& c = *fr.c;
@@ -360,10 +419,10 @@ bool RagdollSolver::buildDirect() {
             }
             fr.invEffectiveMass = w; // completed below
         }
-    std::vector<double> x;
-    for (std::size_t g = 0; g < d.groups.size(); ++g) {
+    std::vector<double>& x = d.solveX;
+    for (std::size_t g = 0; g < d.used; ++g) {
         Direct::Group& group = d.groups[g];
-        const std::vector<Column>& cols = columns[g];
+        const std::vector<Direct::Column>& cols = columns[g];
         if (cols.empty()) continue; // no other row touches the group (Eigen's solve of a 0-column matrix is UB)
         const Eigen::Index k = static_cast<Eigen::Index>(group.rows.size());
         const std::size_t nb = group.bodies.size();
@@ -474,9 +533,10 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
             c.m_contactNormal2.dot(b.m_deltaLinearVelocity) + c.m_relpos2CrossNormal.dot(b.m_deltaAngularVelocity));
     };
     // The joints of every group, exactly.
-    for (Direct::Group& group : d.groups) {
+    for (Direct::Group& group : d.live()) {
         const Eigen::Index n = static_cast<Eigen::Index>(group.rows.size());
-        Vec e(n);
+        d.e.resize(static_cast<std::size_t>(n));
+        Eigen::Map<Vec> e(d.e.data(), n);
         for (Eigen::Index i = 0; i < n; ++i) {
             const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
             e(i) = double(c.m_rhs) / double(c.m_jacDiagABInv) - group.cfm(i) * group.lambda(i) - relVel(c);
@@ -662,7 +722,7 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
                 const double* y = m_direct->reactions.data() + fr.reaction[s];
                 for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
             }
-    for (const Direct::Group& group : m_direct->groups)
+    for (const Direct::Group& group : m_direct->live())
         for (std::size_t i = 0; i < group.rows.size(); ++i)
             m_tmpSolverNonContactConstraintPool[group.rows[i].pool].m_appliedImpulse =
                 static_cast<btScalar>(group.lambda(static_cast<Eigen::Index>(i)));

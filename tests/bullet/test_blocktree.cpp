@@ -5,6 +5,7 @@
 // and the inputs it must refuse.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -161,4 +162,37 @@ TEST_CASE("block tree: refuses cycles, bad sizes and singular pivots", "[bullet]
     tree.diag(1)[0] = 1.0;
     tree.toParent(1)[0] = 1.0;
     CHECK_FALSE(tree.factor());
+}
+
+TEST_CASE("block tree: a reset to the same layout zeroes the blocks and solves as a fresh tree",
+          "[bullet][blocktree]") {
+    std::mt19937 rng(11);
+    const Case first = randomTree(12, rng);
+    Case second = first; // the same layout, other values (the blocks' signs kept)
+    second.dense *= 1.5;
+    const Case other = randomTree(5, rng);
+    std::vector<double> b(static_cast<std::size_t>(first.dense.rows()));
+    for (std::size_t k = 0; k < b.size(); ++k) b[k] = std::sin(double(k));
+    BlockTree fresh;
+    REQUIRE(load(fresh, second));
+    REQUIRE(fresh.factor());
+    std::vector<double> expected = b;
+    fresh.solve(expected.data());
+
+    BlockTree reused;
+    for (const Case* before : {&first, &other}) { // the same layout last time, or another one
+        REQUIRE(load(reused, *before));
+        REQUIRE(reused.factor());
+        REQUIRE(reused.reset(second.dims, second.parent));
+        for (int i = 0; i < reused.nodes(); ++i) {
+            const int d = reused.dim(i), p = reused.parent(i);
+            for (int k = 0; k < d * d; ++k) CHECK(reused.diag(i)[k] == 0.0);
+            for (int k = 0; p >= 0 && k < d * reused.dim(p); ++k) CHECK(reused.toParent(i)[k] == 0.0);
+        }
+        REQUIRE(load(reused, second));
+        REQUIRE(reused.factor());
+        std::vector<double> x = b;
+        reused.solve(x.data());
+        CHECK(x == expected); // bit for bit
+    }
 }
