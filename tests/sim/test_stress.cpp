@@ -133,6 +133,12 @@ TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim
         return std::tuple{Verdict::Open, n * dt, w.start(), w.worstSpin()};
     };
     auto always = [](double) { return true; };
+    // A spin of `radps` reported in the one step at time `at`, nothing otherwise.
+    auto spikeAt = [](double at, double radps) {
+        return [=](double t) { return std::abs(t - at) < dt / 2 ? radps : 0.0; };
+    };
+    // Still at every step but the one at time `at`.
+    auto movedAt = [](double at) { return [=](double t) { return std::abs(t - at) >= dt / 2; }; };
     SECTION("a spin of 2 rad/s over the first 0.1 s, then calm: at rest from 0, after 1 s") {
         const auto [v, at, start, worst] = run([](double t) { return t < 0.1 ? 2.0 : 0.01; }, always, 120);
         CHECK(v == Verdict::Rested);
@@ -141,22 +147,19 @@ TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim
         CHECK(worst == Approx(0.01));
     }
     SECTION("a spin of 2 rad/s at 0.6 s while nothing moves: jitter at the window's end") {
-        const auto [v, at, start, worst] =
-            run([](double t) { return std::abs(t - 0.6) < dt / 2 ? 2.0 : 0.0; }, always, 120);
+        const auto [v, at, start, worst] = run(spikeAt(0.6, 2.0), always, 120);
         CHECK(v == Verdict::Jitter);
         CHECK(at == Approx(1.0));
         CHECK(worst == Approx(2.0));
     }
     SECTION("a move at 0.3 s starts a new window: its settling spin at 0.4 s does not count") {
-        const auto [v, at, start, worst] = run([](double t) { return std::abs(t - 0.4) < dt / 2 ? 3.0 : 0.0; },
-                                               [](double t) { return std::abs(t - 0.3) >= dt / 2; }, 120);
+        const auto [v, at, start, worst] = run(spikeAt(0.4, 3.0), movedAt(0.3), 120);
         CHECK(v == Verdict::Rested);
         CHECK(start == Approx(0.3));
         CHECK(at == Approx(1.3));
     }
     SECTION("a spin just over the bound in the second half of the new window is jitter") {
-        const auto [v, at, start, worst] = run([](double t) { return std::abs(t - 0.9) < dt / 2 ? 1.1 : 0.0; },
-                                               [](double t) { return std::abs(t - 0.3) >= dt / 2; }, 120);
+        const auto [v, at, start, worst] = run(spikeAt(0.9, 1.1), movedAt(0.3), 120);
         CHECK(v == Verdict::Jitter);
         CHECK(start == Approx(0.3));
         CHECK(worst == Approx(1.1));
