@@ -124,9 +124,11 @@ std::optional<Method> methodPreset(std::string_view name) {
         // against the whole ragdoll's mass. The former exact, four substeps of ten iterations, reached 11 mm / 9°
         // at 1 m and 60 mm / 54° at 10 m for 0.94× this cost (README: Methods). The velocity-exact joints still
         // drift at the position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at
-        // impact without a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm.
+        // impact without a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree
+        // step also puts limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only),
+        // moving what is above the ground rather than a foot into it (bodies in contact count 100× heavier there).
         m.directJoints = true;
-        m.positionTree = 1;
+        m.positionTree = 2;
         return m;
     }
     if (name == "multibody") {

@@ -1,9 +1,12 @@
 // The position pass: per joint, limits first, then locked axes, then the anchor (so a sweep ends with the
-// anchors closed), then the contacts. Each projection moves the two bodies by the mass-weighted split of the
+// anchors closed), then the contacts (each manifold point, then each body's deepest point below a static plane when
+// no manifold point knows it). Each projection moves the two bodies by the mass-weighted split of the
 // correction (the effective mass of the constraint's rows, as a velocity row would use it), so the centre of
 // mass and the momentum of an isolated pair are unchanged. References: Müller et al., "Position Based
 // Dynamics" (2007) and Jolt's position steps for the nonlinear Gauss–Seidel scheme; Cline & Pai,
-// "Post-Stabilization for Rigid Body Simulation with Contact and Constraints" (2003) for leaving velocities be.
+// "Post-Stabilization for Rigid Body Simulation with Contact and Constraints" (2003) for leaving velocities be;
+// Guendelman, Bridson & Fedkiw, "Nonconvex Rigid Bodies with Stacking" (2003) for shock propagation (the tree
+// step's heavier grounded bodies).
 #include "PositionPass.h"
 
 #include <algorithm>
@@ -22,6 +25,12 @@ namespace {
 // are not pushed apart and re-made every substep (which would feed jitter into the velocity solve).
 constexpr btScalar kContactSlopM = btScalar(0.002);
 constexpr btScalar kContactFraction = btScalar(0.5);
+// A body's deepest point below a plane is left to the manifolds when one of their points is within this of it.
+constexpr btScalar kKnownPointM = btScalar(0.001);
+// In the tree step of Method::positionTree 2, a body touching anything outside the ragdoll (a manifold point
+// within the speculative reach) counts this many times heavier: the step then closes the joints and limits by
+// moving the bodies above it (shock propagation), not by turning a foot into the ground.
+constexpr btScalar kGroundedTreeMassFactor = btScalar(100);
 // Errors below these are left alone (and a sweep that finds none ends the pass): a tenth of a millimetre and
 // a hundredth of a degree, well below what any metric reports, so a figure at rest or in free fall costs the
 // pass almost nothing.
@@ -62,6 +71,13 @@ Side sideOf(btRigidBody* body) {
     s.invInertiaLocal = body->getInvInertiaDiagLocal();
     s.updateRotation();
     return s;
+}
+
+// Scales a body's inverse mass and inertia (the pass's own copy; Bullet's body is untouched).
+void scaleMass(Side& s, btScalar inverseFactor) {
+    s.invMass *= inverseFactor;
+    s.invInertiaLocal *= inverseFactor;
+    s.updateRotation();
 }
 
 btMatrix3x3 skew(const btVector3& r) { return {0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0}; }
@@ -219,6 +235,80 @@ bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
     const btScalar w = a.invMass + b.invMass + ran.dot(a.invInertia * ran) + rbn.dot(b.invInertia * rbn);
     if (w < SIMD_EPSILON) return false;
     applyLinear(a, b, n * (kContactFraction * depth / w), ra, rb);
+    return true;
+}
+
+// One contact manifold touching the ragdoll, with its sides (null: immovable).
+struct ContactSides {
+    btPersistentManifold* manifold;
+    Side* a;
+    Side* b;
+};
+
+// A static plane (the ground) that a body of the ragdoll has manifolds with.
+struct PlaneContact {
+    Side* side;
+    const btCollisionObject* plane;
+};
+
+// The point of `shape` (at `world`) deepest along −normal, and its height along normal. A compound's deepest
+// child point; a shape that is neither convex nor a compound has none (height: BT_LARGE_FLOAT).
+btVector3 deepestPoint(const btCollisionShape& shape, const btTransform& world, const btVector3& normal,
+                       btScalar& height) {
+    height = BT_LARGE_FLOAT;
+    if (shape.getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+        const auto& compound = static_cast<const btCompoundShape&>(shape);
+        btVector3 best(0, 0, 0);
+        for (int i = 0; i < compound.getNumChildShapes(); ++i) {
+            btScalar h = 0;
+            const btVector3 p =
+                deepestPoint(*compound.getChildShape(i), world * compound.getChildTransform(i), normal, h);
+            if (h < height) {
+                height = h;
+                best = p;
+            }
+        }
+        return best;
+    }
+    if (!shape.isConvex()) return btVector3(0, 0, 0);
+    // With the margin: a hull's surface is its points grown by it; a box's corners already include it.
+    const btVector3 local =
+        static_cast<const btConvexShape&>(shape).localGetSupportingVertex(-(world.getBasis().transpose() * normal));
+    const btVector3 p = world * local;
+    height = p.dot(normal);
+    return p;
+}
+
+// The body's deepest point below the plane, projected as a contact point when the manifolds of the pair do not
+// know it. A body whipped round in the substep (a foot slapping down as its shin lands: 40 rad/s and more, 0.7
+// rad in a substep) turns vertices into the ground that were out of the manifold's reach when the substep began;
+// the manifold's points, carried along, stay above it, so the pass saw nothing while the foot ended 7–15 cm
+// deep. A point the manifolds know (one of them within a millimetre of it) is left to them: at rest on a face or
+// an edge the support point is any of several equal corners, and projecting just one of them would tip the body.
+bool projectPlane(const PlaneContact& pc, std::span<const ContactSides> contacts) {
+    Side& a = *pc.side;
+    const auto& shape = static_cast<const btStaticPlaneShape&>(*pc.plane->getCollisionShape());
+    const btTransform& planeWorld = pc.plane->getWorldTransform();
+    const btVector3 n = planeWorld.getBasis() * shape.getPlaneNormal();
+    const btScalar offset = shape.getPlaneConstant() + n.dot(planeWorld.getOrigin());
+    btScalar height = 0;
+    const btVector3 p = deepestPoint(*a.body->getCollisionShape(), a.transform(), n, height);
+    const btScalar depth = offset - height - kContactSlopM;
+    if (depth <= kAnchorToleranceM) return false;
+    for (const ContactSides& cs : contacts) {
+        const bool first = cs.a == &a && cs.manifold->getBody1() == pc.plane;
+        if (!first && !(cs.b == &a && cs.manifold->getBody0() == pc.plane)) continue;
+        for (int k = 0; k < cs.manifold->getNumContacts(); ++k) {
+            const btManifoldPoint& cp = cs.manifold->getContactPoint(k);
+            const btVector3 known = a.transform() * (first ? cp.m_localPointA : cp.m_localPointB);
+            if (offset - known.dot(n) - kContactSlopM > depth - kKnownPointM) return false;
+        }
+    }
+    const btVector3 ra = p - a.x, ran = ra.cross(n);
+    const btScalar w = a.invMass + ran.dot(a.invInertia * ran);
+    if (w < SIMD_EPSILON) return false;
+    Side immovable;
+    applyLinear(a, immovable, n * (kContactFraction * depth / w), ra, btVector3(0, 0, 0));
     return true;
 }
 
@@ -453,18 +543,13 @@ class JointTree {
     std::vector<double> m_rhs;
 };
 
-// One contact manifold touching the ragdoll, with its sides (null: immovable).
-struct ContactSides {
-    btPersistentManifold* manifold;
-    Side* a;
-    Side* b;
-};
-
 // The pass's buffers, kept from call to call for their capacity: one set per thread, since worlds (each on one
 // thread) may step concurrently.
 struct Scratch {
     std::vector<Side> bodies;
     std::vector<ContactSides> contacts;
+    std::vector<PlaneContact> planes;
+    std::vector<char> grounded;
     std::vector<JointTree::Joint> joints;
     JointTree tree;
 };
@@ -494,6 +579,18 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
         Side* a = sideFor(m->getBody0());
         Side* b = sideFor(m->getBody1());
         if (a || b) contacts.push_back({m, a, b});
+    }
+    // Static planes touching the ragdoll's bodies, once per pair (continuous collision adds a second manifold).
+    std::vector<PlaneContact>& planes = scratch.planes;
+    planes.clear();
+    for (const ContactSides& cs : contacts) {
+        if ((cs.a != nullptr) == (cs.b != nullptr)) continue;
+        Side* side = cs.a ? cs.a : cs.b;
+        const btCollisionObject* other = cs.a ? cs.manifold->getBody1() : cs.manifold->getBody0();
+        if (other->getCollisionShape()->getShapeType() != STATIC_PLANE_PROXYTYPE) continue;
+        if (std::none_of(planes.begin(), planes.end(),
+                         [&](const PlaneContact& p) { return p.side == side && p.plane == other; }))
+            planes.push_back({side, other});
     }
     Side immovableA, immovableB;
     const btMatrix3x3 spawnBasis = r.spawnTransform().getBasis();
@@ -576,13 +673,25 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
             for (int k = 0; k < cs.manifold->getNumContacts(); ++k)
                 corrected = projectContact(a, b, cs.manifold->getContactPoint(k)) || corrected;
         }
+        for (const PlaneContact& pc : planes) corrected = projectPlane(pc, contacts) || corrected;
         if (!corrected) break; // nothing left to correct
     }
     // Then the joints over the tree: Newton steps until every row is within tolerance (three at most: after the
     // sweeps the errors are millimetres and one step leaves only the second-order rest; from centimetres and
     // tens of degrees, three reach the tolerance).
+    std::vector<char>& grounded = scratch.grounded;
+    grounded.assign(bodies.size(), 0);
+    if (haveTree && treeMode >= 2) {
+        for (const ContactSides& cs : contacts)
+            if ((cs.a != nullptr) != (cs.b != nullptr) && cs.manifold->getNumContacts() > 0)
+                grounded[static_cast<std::size_t>((cs.a ? cs.a : cs.b) - bodies.data())] = 1;
+        for (std::size_t i = 0; i < bodies.size(); ++i)
+            if (grounded[i]) scaleMass(bodies[i], 1 / kGroundedTreeMassFactor);
+    }
     for (int n = 0; haveTree && n < 3; ++n)
         if (!tree.step(bodies, rowsOf)) break;
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+        if (grounded[i]) scaleMass(bodies[i], kGroundedTreeMassFactor);
     for (Side& s : bodies) {
         if (!s.moved) continue;
         s.body->setCenterOfMassTransform(s.transform());

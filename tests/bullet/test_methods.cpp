@@ -259,6 +259,117 @@ TEST_CASE("position tree 2: a hinge pushed past its stop is put back on it", "[b
     CHECK(anchorsOnlyGap < 1e-4);
 }
 
+TEST_CASE("position pass: a corner turned into the ground out of the manifold's sight is lifted", "[bullet][methods]") {
+    // An octahedron (vertices ±h on each axis) whose manifold with the ground was made where its bottom vertex
+    // touched; then turned 90° about X (the substep's whip), so that a vertex the manifold never held points
+    // straight down, 3 cm deep, and the held one points sideways, far above the ground. The pass's contact rule
+    // (what is deeper than the 2 mm slop, half of it per sweep) applied to that vertex moves the body straight up
+    // (the vertex is below the centre of mass): after one sweep 2 + 28/2 mm deep, after four 2 + 28/16 mm. A vertex
+    // the manifold does hold is projected once per sweep, not a second time for being the deepest.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure oct {\n body \"oct\" { joint \"origin\" model "
+                                                  "octahedron( ( -8, -8, -8 ), ( 8, 8, 8 ) ) origin ( 0, 0, 8 ) "
+                                                  "density 0.02 }\n}\n",
+                                                  joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    const auto asset = RagdollAsset::create(*built.figure);
+    const auto* hull = dynamic_cast<const btConvexHullShape*>(asset->shape(0));
+    REQUIRE(hull != nullptr);
+    afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
+    auto& r = scene.spawn(asset, {.comeToRest = false});
+    btRigidBody& body = r.body(0);
+    // How deep the body's lowest surface point is (Bullet's support function, margin included).
+    auto depth = [&] {
+        const btTransform& t = body.getCenterOfMassTransform();
+        return -(t * hull->localGetSupportingVertex(t.getBasis().transpose() * btVector3(0, 0, -1))).z();
+    };
+    auto placeAtDepth = [&](const btQuaternion& q, double d) {
+        body.setCenterOfMassTransform(btTransform(q, btVector3(0, 0, 1)));
+        const double now = depth();
+        body.setCenterOfMassTransform(btTransform(q, btVector3(0, 0, btScalar(1 + now - d))));
+        REQUIRE(depth() == Approx(d).margin(1e-6));
+    };
+    auto manifolds = [&] {
+        btDispatcher* d = scene.world().getDispatcher();
+        std::vector<btPersistentManifold*> out;
+        for (int i = 0; i < d->getNumManifolds(); ++i) out.push_back(d->getManifoldByIndexInternal(i));
+        return out;
+    };
+    const btScalar dt = btScalar(1.0 / 60.0);
+    const double slop = 0.002, deep = 0.03;
+
+    SECTION("a vertex the manifold does not hold") {
+        placeAtDepth(btQuaternion::getIdentity(), 0.0005);
+        scene.world().performDiscreteCollisionDetection();
+        const auto held = manifolds();
+        REQUIRE(held.size() == 1);
+        REQUIRE(held[0]->getNumContacts() == 1); // the bottom vertex; the others are h up, beyond reach
+        const btQuaternion turned(btVector3(1, 0, 0), btScalar(90 * kDeg));
+        placeAtDepth(turned, deep);
+        afb::bullet::detail::positionPass(r, 1, 0, held, dt, false);
+        CHECK(depth() == Approx(slop + (deep - slop) / 2).margin(1e-5));
+        CHECK(body.getOrientation().angleShortestPath(turned) < 1e-5); // lifted, not tipped
+        afb::bullet::detail::positionPass(r, 3, 0, held, dt, false);
+        CHECK(depth() == Approx(slop + (deep - slop) / 16).margin(1e-5));
+    }
+    SECTION("a vertex the manifold holds") {
+        placeAtDepth(btQuaternion::getIdentity(), deep);
+        scene.world().performDiscreteCollisionDetection();
+        const auto held = manifolds();
+        REQUIRE(held.size() == 1);
+        REQUIRE(held[0]->getNumContacts() >= 1);
+        afb::bullet::detail::positionPass(r, 1, 0, held, dt, false);
+        CHECK(depth() == Approx(slop + (deep - slop) / 2).margin(1e-5));
+    }
+}
+
+TEST_CASE("position tree 2: a body on the ground counts 100 times heavier, so the other one turns back",
+          "[bullet][methods]") {
+    // A flat box on the ground and a small cube hinged to it at both their centres (so the anchor holds whatever
+    // either turns, and the limit is the only error), the cube turned past its stop about the hinge axis. The tree
+    // step splits a turn about the axis by the bodies' inverse inertias about it, the box's divided by 100 because
+    // it has contact points with the ground (shock propagation): the box turns e·(w_box/100)/(w_cube + w_box/100),
+    // the cube the rest. Without the factor the box, much the easier to turn here, would take most of it.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"cube", 0, 0, 0, 4}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure t {\n settings { selfCollision 0 }\n"
+        " body \"box\" { joint \"origin\" model box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, 0, 4 ) density 0.002 }\n"
+        " body \"cube\" { joint \"cube\" model box( ( -2, -2, -2 ), ( 2, 2, 2 ) ) origin ( 0, 0, 4 ) density 0.5 }\n"
+        " hinge \"h\" { body1 \"cube\" body2 \"box\" anchor ( 0, 0, 4 ) axis ( 0, 1, 0 ) friction 0 limit 0, 30, 0 "
+        "}\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
+    auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+    btRigidBody& box = r.body(0);
+    btRigidBody& cube = r.body(1);
+    REQUIRE(r.jointError(0).limitExcessRad == 0);
+    btTransform t = cube.getCenterOfMassTransform();
+    t.setRotation(btQuaternion(btVector3(0, 1, 0), btScalar(55 * kDeg)) * t.getRotation());
+    cube.setCenterOfMassTransform(t);
+    const double excess = r.jointError(0).limitExcessRad;
+    REQUIRE(excess > 15 * kDeg);
+    scene.world().performDiscreteCollisionDetection();
+    btDispatcher* d = scene.world().getDispatcher();
+    std::vector<btPersistentManifold*> held;
+    for (int i = 0; i < d->getNumManifolds(); ++i)
+        if (d->getManifoldByIndexInternal(i)->getNumContacts() > 0) held.push_back(d->getManifoldByIndexInternal(i));
+    REQUIRE(held.size() == 1); // the box and the ground
+    const btQuaternion box0 = box.getOrientation(), cube0 = cube.getOrientation();
+    afb::bullet::detail::positionPass(r, 0, 2, held, btScalar(1.0 / 60.0), false);
+    CHECK(r.jointError(0).limitExcessRad < 0.05 * kDeg);
+    const double wBox = box.getInvInertiaDiagLocal().y(), wCube = cube.getInvInertiaDiagLocal().y();
+    const double boxShare = (wBox / 100) / (wCube + wBox / 100);
+    REQUIRE(wBox / (wCube + wBox) > 10 * boxShare); // the factor is what decides the split here
+    const double boxTurn = box.getOrientation().angleShortestPath(box0);
+    const double cubeTurn = cube.getOrientation().angleShortestPath(cube0);
+    INFO("box turned " << boxTurn / kDeg << " deg, cube " << cubeTurn / kDeg << " deg of " << excess / kDeg);
+    CHECK(boxTurn == Approx(excess * boxShare).epsilon(0.05));
+    CHECK(cubeTurn == Approx(excess * (1 - boxShare)).epsilon(0.05));
+}
+
 TEST_CASE("speculative limits: a falling pendulum stops at its hinge limit", "[bullet][methods]") {
     // The arm falls from horizontal about the hinge (axis Y, φ > 0 turns it down) and meets the stop at
     // φ = 60° with ω = sqrt(2·m·g·c·sin 60° / I) ≈ 7.1 rad/s (c = 0.254 m to the centre of mass, I = m·L²/3

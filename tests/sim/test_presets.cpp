@@ -31,7 +31,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
         {"fast", 0.025, 15, 0.005},    // measured 21.5 mm, 13.5°, 4.0 mm
         {"default", 0.024, 13, 0.005}, // 19.9 mm, 10.9°, 2.7 mm
         {"accurate", 0.012, 3, 0.005}, // 8.8 mm, 2.5°, 3.7 mm
-        {"exact", 0.001, 4, 0.005},    // 0.1 mm, 3.0° (direct joint solve, tree position step), 3.3 mm
+        {"exact", 0.001, 2, 0.005},    // 0.2 mm, 0.5° (direct joint solve, tree position step with limits), 3.1 mm
     };
     afb::sim::DropOptions o;
     o.heightM = 1.0;
