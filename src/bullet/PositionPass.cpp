@@ -1,12 +1,14 @@
 // The position pass: per joint, limits first, then locked axes, then the anchor (so a sweep ends with the
 // anchors closed), then the contacts (each manifold point, then each body's deepest point below a static plane when
-// no manifold point knows it). Each projection moves the two bodies by the mass-weighted split of the
+// no manifold point knows it, then static friction: the points the velocity solve held by it go back to where the
+// pass found them along the contact plane). Each projection moves the two bodies by the mass-weighted split of the
 // correction (the effective mass of the constraint's rows, as a velocity row would use it), so the centre of
 // mass and the momentum of an isolated pair are unchanged. References: Müller et al., "Position Based
 // Dynamics" (2007) and Jolt's position steps for the nonlinear Gauss–Seidel scheme; Cline & Pai,
 // "Post-Stabilization for Rigid Body Simulation with Contact and Constraints" (2003) for leaving velocities be;
 // Guendelman, Bridson & Fedkiw, "Nonconvex Rigid Bodies with Stacking" (2003) for shock propagation (the tree
-// step's heavier grounded bodies).
+// step's heavier grounded bodies); Müller et al., "Detailed Rigid Body Simulation with Extended Position Based
+// Dynamics" (2020) for static friction as a positional correction.
 #include "PositionPass.h"
 
 #include <algorithm>
@@ -27,6 +29,14 @@ constexpr btScalar kContactSlopM = btScalar(0.002);
 constexpr btScalar kContactFraction = btScalar(0.5);
 // A body's deepest point below a plane is left to the manifolds when one of their points is within this of it.
 constexpr btScalar kKnownPointM = btScalar(0.001);
+// A contact point sticks in the pass when the velocity solve pressed it (a normal impulse), its friction used
+// less than this fraction of the Coulomb bound μ·N in each direction (held by static friction with room to spare)
+// and it moves slower than kStickSpeedMps after the solve. The speed bound keeps the rule to figures settling
+// or at rest: in an impact the pass must be free to put limits back (sticking there too, the humanoid's knee went
+// 2° further past its stop at 1 m). Measured on the stress matrix's humanoid rows at 24 yaws (192 runs), with
+// `default`: no sticking 105 runs pass, fraction 0.9 133, 0.5 136, 0.5 below 0.1 m/s 139 (0.05 m/s: 132).
+constexpr btScalar kStickFrictionFraction = btScalar(0.5);
+constexpr btScalar kStickSpeedMps = btScalar(0.1);
 // In the tree step of Method::positionTree 2, a body touching anything outside the ragdoll (a manifold point
 // within the speculative reach) counts this many times heavier: the step then closes the joints and limits by
 // moving the bodies above it (shock propagation), not by turning a foot into the ground.
@@ -312,6 +322,35 @@ bool projectPlane(const PlaneContact& pc, std::span<const ContactSides> contacts
     return true;
 }
 
+// A contact point on static geometry that the velocity solve held by static friction, where the pass found it.
+struct Stick {
+    Side* side;
+    btVector3 local; ///< the point in the body's frame
+    btVector3 world; ///< where it was when the pass began
+    btVector3 normal;
+};
+
+// Static friction at the position level: the point goes back to where it was along the contact plane (the
+// normal is the contact rule's). Without it the pass slid every resting body's contacts freely while it closed
+// the joints the velocity solve had let sag under the weight, and the velocity solve's friction then held them
+// where they had slid: each step the figure inched along the ground (a lying humanoid crawled at 15–25 mm/s and
+// never came to rest in most of the stress runs that fail `no-rest`).
+bool projectStick(const Stick& st) {
+    Side& a = *st.side;
+    const btVector3 p = a.transform() * st.local;
+    btVector3 slide = p - st.world;
+    slide -= st.normal * slide.dot(st.normal);
+    const btScalar length = slide.length();
+    if (length <= kAnchorToleranceM) return false;
+    const btVector3 t = slide / length;
+    const btVector3 ra = p - a.x, rat = ra.cross(t);
+    const btScalar w = a.invMass + rat.dot(a.invInertia * rat);
+    if (w < SIMD_EPSILON) return false;
+    Side immovable;
+    applyLinear(a, immovable, -t * (length / w), ra, btVector3(0, 0, 0));
+    return true;
+}
+
 // Method::positionVelocity: the pass moved the body by Δx since the step integrated it by v·dt. The fraction of
 // that motion the pass took back (how far Δx goes against v, over |v|·dt, clamped to [0, 1]) is removed from v,
 // so that a motion the pass reverts every substep does not live on in the velocity. A move across v takes
@@ -549,6 +588,7 @@ struct Scratch {
     std::vector<Side> bodies;
     std::vector<ContactSides> contacts;
     std::vector<PlaneContact> planes;
+    std::vector<Stick> sticks;
     std::vector<char> grounded;
     std::vector<JointTree::Joint> joints;
     JointTree tree;
@@ -591,6 +631,26 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
         if (std::none_of(planes.begin(), planes.end(),
                          [&](const PlaneContact& p) { return p.side == side && p.plane == other; }))
             planes.push_back({side, other});
+    }
+    // Contact points on static (or kinematic) geometry held by static friction in the velocity solve.
+    std::vector<Stick>& sticks = scratch.sticks;
+    sticks.clear();
+    for (const ContactSides& cs : contacts) {
+        if ((cs.a != nullptr) == (cs.b != nullptr)) continue;
+        const btCollisionObject* other = cs.a ? cs.manifold->getBody1() : cs.manifold->getBody0();
+        if (!other->isStaticOrKinematicObject()) continue;
+        Side* side = cs.a ? cs.a : cs.b;
+        for (int k = 0; k < cs.manifold->getNumContacts(); ++k) {
+            const btManifoldPoint& cp = cs.manifold->getContactPoint(k);
+            const btScalar bound = kStickFrictionFraction * cp.m_combinedFriction * cp.m_appliedImpulse;
+            if (cp.m_appliedImpulse <= 0 || std::abs(cp.m_appliedImpulseLateral1) > bound ||
+                std::abs(cp.m_appliedImpulseLateral2) > bound)
+                continue;
+            const btVector3 local = cs.a ? cp.m_localPointA : cp.m_localPointB;
+            const btVector3 at = side->transform() * local;
+            if (side->body->getVelocityInLocalPoint(at - side->x).length() > kStickSpeedMps) continue;
+            sticks.push_back({side, local, at, cp.m_normalWorldOnB});
+        }
     }
     Side immovableA, immovableB;
     const btMatrix3x3 spawnBasis = r.spawnTransform().getBasis();
@@ -674,6 +734,7 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
                 corrected = projectContact(a, b, cs.manifold->getContactPoint(k)) || corrected;
         }
         for (const PlaneContact& pc : planes) corrected = projectPlane(pc, contacts) || corrected;
+        for (const Stick& st : sticks) corrected = projectStick(st) || corrected;
         if (!corrected) break; // nothing left to correct
     }
     // Then the joints over the tree: Newton steps until every row is within tolerance (three at most: after the

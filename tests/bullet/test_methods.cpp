@@ -324,6 +324,74 @@ TEST_CASE("position pass: a corner turned into the ground out of the manifold's 
     }
 }
 
+TEST_CASE("position pass: contact points held by static friction do not slide while the pass closes a joint",
+          "[bullet][methods]") {
+    // A box lying on the ground, joined at its centre by a ball joint to a small cube 30 times heavier inside it
+    // (not touching the ground; no self-collision, no gravity), the box moved a centimetre to the side. The box's
+    // inertia is scaled up 300 times so that a correction at a corner barely turns it: the split is then
+    // the masses'. Its four bottom corners are the manifold's points; the velocity solve's result is written into
+    // them: pressed (normal impulse 1 N·s) with no friction used (static friction, well inside the cone), or with
+    // friction at its Coulomb bound μ·N (sliding). Each sweep's joint projection closes the gap g, moving the box
+    // by g·w_box / (w_box + w_cube). Sliding, that is all: the box moves that far and the joint is closed.
+    // Sticking, the corners then go back where they were, so the box stays and the gap shrinks only by the cube's
+    // share each sweep: g·(w_box / (w_box + w_cube))⁴ after four.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"post", 0, 0, 0, 4}};
+    const auto built = afb::test::buildTestFigure(
+        "articulatedFigure b {\n settings { selfCollision 0 }\n"
+        " body \"box\" { joint \"origin\" model box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, 0, 4 ) density 0.02 "
+        "inertiaScale ( 300 0 0 0 300 0 0 0 300 ) }\n"
+        " body \"post\" { joint \"post\" model box( ( -2, -2, -2 ), ( 2, 2, 2 ) ) origin ( 0, 0, 4 ) density 20 }\n"
+        " ballAndSocketJoint \"b\" { body1 \"box\" body2 \"post\" anchor ( 0, 0, 4 ) friction 0 }\n}\n",
+        joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    const double gap = 0.01;
+    double boxShare = 0;
+    auto afterPass = [&](bool sliding) {
+        afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
+        auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        btRigidBody& box = r.body(0);
+        boxShare = box.getInvMass() / (box.getInvMass() + r.body(1).getInvMass());
+        btTransform t = box.getCenterOfMassTransform();
+        t.getOrigin() += btVector3(btScalar(gap), 0, btScalar(-5e-5)); // and just touching the ground
+        box.setCenterOfMassTransform(t);
+        REQUIRE(r.jointError(0).anchorM == Approx(gap).margin(1e-4));
+        scene.world().performDiscreteCollisionDetection();
+        btDispatcher* d = scene.world().getDispatcher();
+        btPersistentManifold* m = nullptr; // the box's with the ground
+        for (int i = 0; i < d->getNumManifolds(); ++i) {
+            btPersistentManifold* candidate = d->getManifoldByIndexInternal(i);
+            if ((candidate->getBody0() == &box && candidate->getBody1()->isStaticObject()) ||
+                (candidate->getBody1() == &box && candidate->getBody0()->isStaticObject()))
+                m = candidate;
+        }
+        REQUIRE(m != nullptr);
+        REQUIRE(m->getNumContacts() == 4);
+        for (int k = 0; k < 4; ++k) {
+            btManifoldPoint& cp = m->getContactPoint(k);
+            REQUIRE(std::abs(cp.getDistance()) < 2e-4);
+            cp.m_appliedImpulse = 1;
+            cp.m_appliedImpulseLateral1 = sliding ? cp.m_combinedFriction * cp.m_appliedImpulse : 0;
+            cp.m_appliedImpulseLateral2 = 0;
+        }
+        const btVector3 before = box.getCenterOfMassPosition();
+        const double gapBefore = r.jointError(0).anchorM;
+        afb::bullet::detail::positionPass(r, 4, 0, std::span<btPersistentManifold* const>(&m, 1), btScalar(1.0 / 60.0),
+                                          false);
+        return std::tuple{(box.getCenterOfMassPosition() - before).length(), gapBefore, r.jointError(0).anchorM};
+    };
+    const auto [slid, gapSliding0, gapSliding] = afterPass(true);
+    INFO("box's share " << boxShare << "; sliding: the box moved " << slid << " m, the joint is " << gapSliding
+                        << " m open");
+    CHECK(slid == Approx(gapSliding0 * boxShare).epsilon(1e-3));
+    CHECK(gapSliding < 1e-5);
+    const auto [stuck, gapSticking0, gapSticking] = afterPass(false);
+    INFO("sticking: the box moved " << stuck << " m, the joint is " << gapSticking << " m open");
+    // (What the turning left: the four corners pull the box back one after the other, each turning it a little.)
+    CHECK(stuck < 0.05 * gap);
+    CHECK(gapSticking == Approx(gapSticking0 * std::pow(boxShare, 4)).epsilon(0.02));
+}
+
 TEST_CASE("position tree 2: a body on the ground counts 100 times heavier, so the other one turns back",
           "[bullet][methods]") {
     // A flat box on the ground and a small cube hinged to it at both their centres (so the anchor holds whatever

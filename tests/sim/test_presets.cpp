@@ -23,19 +23,21 @@ struct Bounds {
 
 TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", "[sim][presets]") {
     const afb::figure::Figure humanoid = bundled("humanoid");
-    // Bounds on the 3 s drop of one humanoid (yaw 0) at 60 Hz; "legacy" is the method before presets existed
+    // Bounds on the 4 s drop of one humanoid (yaw 0) at 60 Hz; "legacy" is the method before presets existed
     // (world iterations 10, joints 20, no extras), kept as the reference the presets must beat.
     const Bounds bounds[] = {
         // Rest penetration at the accuracy issue's 5 mm for every preset (since hulls hold each corner once and limit
-        // rows are warm-started: README, Methods points 7 and 11). Measured with position-velocity (point 12).
-        {"fast", 0.025, 15, 0.005},    // measured 21.5 mm, 13.5°, 4.0 mm
-        {"default", 0.024, 13, 0.005}, // 19.9 mm, 10.9°, 2.7 mm
-        {"accurate", 0.012, 3, 0.005}, // 8.8 mm, 2.5°, 3.7 mm
-        {"exact", 0.001, 2, 0.005},    // 0.2 mm, 0.5° (direct joint solve, tree position step with limits), 3.1 mm
+        // rows are warm-started: README, Methods points 7 and 11). Measured with position-velocity (point 12) and
+        // the position pass's static friction (point 13; accurate's knee went 2.5° → 3.1° past its stop with it; over
+        // the four figures and four yaws its worst stays 4.5°). 4 s: at 3 s `exact`'s feet were still settling.
+        {"fast", 0.025, 15, 0.005},      // measured 21.5 mm, 13.3°, 2.7 mm
+        {"default", 0.024, 13, 0.005},   // 19.9 mm, 10.0°, 2.7 mm
+        {"accurate", 0.012, 3.5, 0.005}, // 8.8 mm, 3.1°, 2.6 mm
+        {"exact", 0.001, 2, 0.005},      // 0.1 mm, 0.6° (direct joint solve, tree position step with limits), 2.5 mm
     };
     afb::sim::DropOptions o;
     o.heightM = 1.0;
-    o.seconds = 3.0;
+    o.seconds = 4.0;
     o.sleeping = false;
     o.method = *afb::bullet::methodPreset("legacy");
     const afb::sim::DropResult reference = afb::sim::runDrop(humanoid, o);
