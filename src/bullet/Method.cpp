@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
                                                           "exact", "legacy",  "multibody"};
 
-const std::array<MethodKnob, 22> kKnobs = {{
+const std::array<MethodKnob, 23> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -38,6 +38,10 @@ const std::array<MethodKnob, 22> kKnobs = {{
     {"multipoint-contacts", "Full contact manifolds at first touch (on/off)", &Method::multipointContacts},
     {"speculative-contacts", "Contacts kept from as far as a body travels in a substep (on/off)",
      &Method::speculativeContacts},
+    {"self-contact-cap",
+     "Warm start of a contact within one ragdoll at most this many times the pair's weight per step (0: no "
+     "bound; needs a RagdollSolver)",
+     &Method::selfContactCap},
     {"speculative-limits", "Limit rows active before the limit is reached (on/off)", &Method::speculativeLimits},
     {"ccd", "Continuous collision: off or fast-bodies", &Method::ccd},
     {"joint-warm-starting", "Joint rows start from their last impulse (on/off; needs a RagdollSolver)",
@@ -62,6 +66,7 @@ Range rangeOf(std::string_view knob) {
     if (knob == "position-iterations") return {0, 100};
     if (knob == "position-tree") return {0, 2};
     if (knob == "solver-tolerance") return {0, 1e6};
+    if (knob == "self-contact-cap") return {0, 1000};
     return {0, 1}; // ERPs and the warm-starting factor
 }
 
@@ -104,6 +109,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.multipointContacts = m.speculativeContacts = m.speculativeLimits = m.jointWarmStarting = false;
         m.limitWarmStarting = false;
         m.positionVelocity = false;
+        m.selfContactCap = 0;
         return m;
     }
     if (name == "fast") {
@@ -142,6 +148,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.jointWarmStarting = m.limitWarmStarting = false;
         m.positionVelocity = false;
         m.ccd = CcdPolicy::Off;
+        m.selfContactCap = 0; // Bullet's multibody solver, not a RagdollSolver
         return m;
     }
     return std::nullopt;

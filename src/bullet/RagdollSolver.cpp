@@ -738,6 +738,26 @@ void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, b
     t.direct = direct;
 }
 
+void RagdollSolver::convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
+                                    const btContactSolverInfo& infoGlobal) {
+    if (m_contactCap && (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING))
+        for (int i = 0; i < numManifolds; ++i) {
+            btPersistentManifold& m = *manifoldPtr[i];
+            if (m.getNumContacts() == 0) continue;
+            const btScalar cap = m_contactCap(m, infoGlobal.m_timeStep);
+            if (cap < 0) continue;
+            for (int k = 0; k < m.getNumContacts(); ++k) {
+                btManifoldPoint& cp = m.getContactPoint(k);
+                if (cp.m_appliedImpulse <= cap) continue;
+                const btScalar scale = cap / cp.m_appliedImpulse;
+                cp.m_appliedImpulse = cap;
+                cp.m_appliedImpulseLateral1 *= scale;
+                cp.m_appliedImpulseLateral2 *= scale;
+            }
+        }
+    btSequentialImpulseConstraintSolver::convertContacts(manifoldPtr, numManifolds, infoGlobal);
+}
+
 void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.erase(&constraint); }
 
 void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstraints,

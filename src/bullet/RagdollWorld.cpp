@@ -362,12 +362,26 @@ class RagdollWorld::MergedBodies : public detail::CompoundRules {
 RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
     : m_world(world), m_method(method), m_action(std::make_unique<PositionAction>(*this)) {
     applyWorldKnobs(m_world, m_method);
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
+        solver && m_method.selfContactCap > 0)
+        solver->setContactWarmStartCap([this](const btPersistentManifold& m, btScalar dt) {
+            // Self-collision only: the game's contacts, and those between two ragdolls, keep Bullet's warm start.
+            const BodyOwner* a = ownerOf(m.getBody0());
+            const BodyOwner* b = ownerOf(m.getBody1());
+            if (a == nullptr || b == nullptr || a->ragdoll != b->ragdoll) return btScalar(-1);
+            const btRigidBody* ra = btRigidBody::upcast(m.getBody0());
+            const btRigidBody* rb = btRigidBody::upcast(m.getBody1());
+            if (ra == nullptr || rb == nullptr) return btScalar(-1);
+            const btScalar weight = (ra->getMass() + rb->getMass()) * m_world.getGravity().length() * dt;
+            return static_cast<btScalar>(m_method.selfContactCap) * weight;
+        });
     m_world.addAction(m_action.get());
     if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(m_world.getDispatcher()))
         m_mergedBodies = std::make_unique<MergedBodies>(*this, *dispatcher);
 }
 
 RagdollWorld::~RagdollWorld() {
+    if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver())) solver->setContactWarmStartCap({});
     m_mergedBodies.reset();
     m_world.removeAction(m_action.get());
 }

@@ -392,6 +392,58 @@ TEST_CASE("position pass: contact points held by static friction do not slide wh
     CHECK(gapSticking == Approx(gapSticking0 * std::pow(boxShare, 4)).epsilon(0.02));
 }
 
+TEST_CASE("self-contact cap: a contact within one ragdoll starts from at most k times its pair's weight per step",
+          "[bullet][methods]") {
+    // RagdollWorld gives its RagdollSolver the bound of Method::selfContactCap: for two bodies of one ragdoll
+    // k·(m_a + m_b)·g·dt, for anything else none. The solver then starts a point whose last impulse is above the
+    // bound from the bound, its friction scaled by the same factor, and leaves a point below it alone.
+    afb::sim::Scene scene(*afb::bullet::methodPreset("default"));
+    const afb::figure::Figure humanoid =
+        armFigure("ballAndSocketJoint \"b\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) friction 0 }");
+    auto& a = scene.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
+    auto& b = scene.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
+    auto* solver = dynamic_cast<afb::bullet::RagdollSolver*>(scene.world().getConstraintSolver());
+    REQUIRE(solver != nullptr);
+    const auto& cap = solver->contactWarmStartCap();
+    REQUIRE(cap);
+    const btScalar dt = btScalar(1.0 / 60.0);
+    const double k = afb::bullet::methodPreset("default")->selfContactCap;
+    REQUIRE(k > 0);
+    btPersistentManifold self(&a.body(0), &a.body(1), 0, btScalar(0.02), btScalar(0.02));
+    btPersistentManifold across(&a.body(1), &b.body(1), 0, btScalar(0.02), btScalar(0.02));
+    btRigidBody box(1, nullptr, nullptr);
+    btPersistentManifold game(&a.body(1), &box, 0, btScalar(0.02), btScalar(0.02));
+    const double weight = (a.body(0).getMass() + a.body(1).getMass()) * 9.81 * dt;
+    CHECK(cap(self, dt) == Approx(k * weight).epsilon(1e-5));
+    CHECK(cap(across, dt) < 0);
+    CHECK(cap(game, dt) < 0);
+
+    // The solver applies a bound when it converts the contacts (a subclass reaches the protected step).
+    struct Exposed : afb::bullet::RagdollSolver {
+        using afb::bullet::RagdollSolver::convertContacts;
+    } exposed;
+    exposed.setContactWarmStartCap([](const btPersistentManifold&, btScalar) { return btScalar(2); });
+    btRigidBody one(1, nullptr, nullptr), two(1, nullptr, nullptr);
+    btPersistentManifold m(&one, &two, 0, btScalar(0.02), btScalar(0.02));
+    auto addPoint = [&](btScalar impulse, btScalar lateral) {
+        btManifoldPoint cp(btVector3(0, 0, 0), btVector3(0, 0, 0), btVector3(0, 0, 1), 0);
+        cp.m_appliedImpulse = impulse;
+        cp.m_appliedImpulseLateral1 = lateral;
+        m.addManifoldPoint(cp);
+    };
+    addPoint(10, 4);
+    addPoint(1, 0.5);
+    btContactSolverInfo info;
+    info.m_timeStep = dt;
+    info.m_solverMode |= SOLVER_USE_WARMSTARTING;
+    btPersistentManifold* list = &m;
+    exposed.convertContacts(&list, 1, info);
+    CHECK(m.getContactPoint(0).m_appliedImpulse == Approx(2));
+    CHECK(m.getContactPoint(0).m_appliedImpulseLateral1 == Approx(0.8));
+    CHECK(m.getContactPoint(1).m_appliedImpulse == Approx(1));
+    CHECK(m.getContactPoint(1).m_appliedImpulseLateral1 == Approx(0.5));
+}
+
 TEST_CASE("position tree 2: a body on the ground counts 100 times heavier, so the other one turns back",
           "[bullet][methods]") {
     // A flat box on the ground and a small cube hinged to it at both their centres (so the anchor holds whatever

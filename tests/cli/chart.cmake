@@ -25,7 +25,7 @@ set(expected_columns
     max_speed_mps exploded exploded_at_s non_finite settle_time_s method.backend method.substeps method.iterations
     method.joint-iterations method.solver-tolerance method.split-impulse method.contact-erp method.joint-erp method.limit-erp
     method.warm-starting method.warm-starting-factor method.position-iterations method.position-tree method.position-velocity method.multipoint-contacts
-    method.speculative-contacts method.speculative-limits method.ccd method.joint-warm-starting
+    method.speculative-contacts method.self-contact-cap method.speculative-limits method.ccd method.joint-warm-starting
     method.limit-warm-starting method.direct-joints method.merge-fixed)
 string(REPLACE "," ";" columns "${header}")
 if(NOT columns STREQUAL expected_columns)

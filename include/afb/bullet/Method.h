@@ -89,6 +89,12 @@ struct Method {
     /// later (Bullet treats contacts at a positive distance as speculative). Runs where a RagdollWorld manages
     /// the world; the engine's restitution then applies only to touching contacts.
     bool speculativeContacts = true;
+    /// Warm start of a contact between two bodies of one ragdoll (self-collision) carries at most this many
+    /// times the pair's weight per step (m_a + m_b)·g·dt; 0: no bound (Bullet's warm start). A forearm pressed
+    /// into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy; warm-started,
+    /// the contact's impulse and the elbow's opposing row grew by 3 N·s every step to 50 N·s (3 kN) while the
+    /// forearm sank 5 cm into the torso (README: Methods). Needs a RagdollSolver; no effect without it.
+    double selfContactCap = 3;
 
     // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
     /// Solver iterations of the figure's joints and limits (btTypedConstraint's per-constraint override), or 0

@@ -7,6 +7,7 @@
 // along the chain every step; what they fail to rebuild shows as joints that sag apart and limits that give.
 // This solver starts each tracked row from the world's warm-starting factor times its last impulse, as Bullet
 // does for contacts (README: Methods).
+#include <functional>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -43,7 +44,16 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     void setDirectJoints(bool on);
     bool directJoints() const;
 
+    /// The largest impulse (N·s) a contact point of `manifold` may start a step of `dt` seconds from (warm start),
+    /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
+    /// sets it from Method::selfContactCap.
+    using ContactWarmStartCap = std::function<btScalar(const btPersistentManifold& manifold, btScalar dt)>;
+    void setContactWarmStartCap(ContactWarmStartCap cap) { m_contactCap = std::move(cap); }
+    const ContactWarmStartCap& contactWarmStartCap() const { return m_contactCap; }
+
   protected:
+    void convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
+                         const btContactSolverInfo& infoGlobal) override;
     void convertJoints(btTypedConstraint** constraints, int numConstraints,
                        const btContactSolverInfo& infoGlobal) override;
     btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
@@ -55,6 +65,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
                                                btIDebugDraw* debugDrawer) override;
 
   private:
+    ContactWarmStartCap m_contactCap;
     struct Tracked {
         std::vector<btScalar> impulses; ///< last impulse of every row
         bool warmStart = true;
