@@ -93,8 +93,9 @@ struct Method {
     /// times the pair's weight per step (m_a + m_b)·g·dt; 0: no bound (Bullet's warm start). A forearm pressed
     /// into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy; warm-started,
     /// the contact's impulse and the elbow's opposing row grew by 3 N·s every step to 50 N·s (3 kN) while the
-    /// forearm sank 5 cm into the torso (README: Methods). Needs a RagdollSolver; no effect without it.
-    double selfContactCap = 3;
+    /// forearm sank 5 cm into the torso (README: Methods). 10, not less: at 3 a humanoid's arm lying under its
+    /// torso came 27 mm off its elbow at rest. Needs a RagdollSolver; no effect without it.
+    double selfContactCap = 10;
 
     // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
     /// Solver iterations of the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
