@@ -21,11 +21,17 @@ namespace {
 // |a − b| within 1e-9 relative to the larger magnitude (absolute below 1).
 bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)}); }
 
-// The humanoid twice, at the same spawn: the adapter (default method) and raw, in two zero-gravity scenes.
+// The humanoid twice, at the same spawn: the adapter (default method, its fixed wrists unmerged: raw builds one
+// btRigidBody per figure body) and raw, in two zero-gravity scenes.
+bullet::Method unmergedDefault() {
+    bullet::Method m;
+    m.mergeFixed = false;
+    return m;
+}
 struct Pair {
     std::shared_ptr<const bullet::RagdollAsset> asset =
         bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
-    sim::Scene adapterScene{bullet::Method{}, {.gravityMps2 = 0, .ground = false}};
+    sim::Scene adapterScene{unmergedDefault(), {.gravityMps2 = 0, .ground = false}};
     sim::Scene rawScene{sim::rawMethod(), {.gravityMps2 = 0, .ground = false}};
     bullet::Ragdoll* adapter = nullptr;
     sim::RawRagdoll* raw = nullptr;
