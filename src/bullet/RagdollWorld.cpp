@@ -51,6 +51,8 @@ constexpr double kMaxSpeculativeM = 0.5;
 // How far a body can come within a step: its speed (centre plus spin at its bounding radius) times the step, with a
 // 25 % allowance for the acceleration within the step.
 constexpr btScalar kReachAllowance = btScalar(1.25);
+// The least gravity the self-contact cap (Method::selfContactCap) scales with, m/s².
+constexpr btScalar kStandardGravityMps2 = btScalar(9.81);
 
 // Guards of the process-wide callback: installed by the first guard that finds it free, removed by the last.
 std::mutex gFrictionMutex;
@@ -372,7 +374,10 @@ RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
             const btRigidBody* ra = btRigidBody::upcast(m.getBody0());
             const btRigidBody* rb = btRigidBody::upcast(m.getBody1());
             if (ra == nullptr || rb == nullptr) return btScalar(-1);
-            const btScalar weight = (ra->getMass() + rb->getMass()) * m_world.getGravity().length() * dt;
+            // At least standard gravity: in a weightless world the pair still carries what pushes it together
+            // (a cap of 0 would cold-start every self-contact, and an arm pressed to the torso needs its warm start).
+            const btScalar g = std::max(m_world.getGravity().length(), kStandardGravityMps2);
+            const btScalar weight = (ra->getMass() + rb->getMass()) * g * dt;
             return static_cast<btScalar>(m_method.selfContactCap) * weight;
         });
     m_world.addAction(m_action.get());

@@ -418,6 +418,21 @@ TEST_CASE("self-contact cap: a contact within one ragdoll starts from at most k 
     CHECK(cap(across, dt) < 0);
     CHECK(cap(game, dt) < 0);
 
+    // The weight is taken at standard gravity at least: weightless, a self-contact still starts warm.
+    afb::sim::Scene weightless(*afb::bullet::methodPreset("default"), {.gravityMps2 = 0, .ground = false});
+    auto& w = weightless.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
+    auto* wsolver = dynamic_cast<afb::bullet::RagdollSolver*>(weightless.world().getConstraintSolver());
+    REQUIRE(wsolver != nullptr);
+    btPersistentManifold wself(&w.body(0), &w.body(1), 0, btScalar(0.02), btScalar(0.02));
+    CHECK(wsolver->contactWarmStartCap()(wself, dt) == Approx(k * weight).epsilon(1e-5));
+    // and at the world's own when that is stronger (Doom's 27.1 m/s²).
+    afb::sim::Scene heavy(*afb::bullet::methodPreset("default"), {.gravityMps2 = 27.1, .ground = false});
+    auto& h = heavy.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
+    auto* hsolver = dynamic_cast<afb::bullet::RagdollSolver*>(heavy.world().getConstraintSolver());
+    REQUIRE(hsolver != nullptr);
+    btPersistentManifold hself(&h.body(0), &h.body(1), 0, btScalar(0.02), btScalar(0.02));
+    CHECK(hsolver->contactWarmStartCap()(hself, dt) == Approx(k * weight * 27.1 / 9.81).epsilon(1e-4));
+
     // The solver applies a bound when it converts the contacts (a subclass reaches the protected step).
     struct Exposed : afb::bullet::RagdollSolver {
         using afb::bullet::RagdollSolver::convertContacts;

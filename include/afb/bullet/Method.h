@@ -90,10 +90,11 @@ struct Method {
     /// the world; the engine's restitution then applies only to touching contacts.
     bool speculativeContacts = true;
     /// Warm start of a contact between two bodies of one ragdoll (self-collision) carries at most this many
-    /// times the pair's weight per step (m_a + m_b)·g·dt; 0: no bound (Bullet's warm start). A forearm pressed
-    /// into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy; warm-started,
-    /// the contact's impulse and the elbow's opposing row grew by 3 N·s every step to 50 N·s (3 kN) while the
-    /// forearm sank 5 cm into the torso (README: Methods). 10, not less: at 3 a humanoid's arm lying under its
+    /// times the pair's weight per step (m_a + m_b)·g·dt, g the world's gravity but at least 9.81 m/s² (a
+    /// weightless world would otherwise cold-start every self-contact); 0: no bound (Bullet's warm start). A forearm
+    /// pressed into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy;
+    /// warm-started, the contact's impulse and the elbow's opposing row grew by 3 N·s every step to 50 N·s (3 kN) while
+    /// the forearm sank 5 cm into the torso (README: Methods). 10, not less: at 3 a humanoid's arm lying under its
     /// torso came 27 mm off its elbow at rest. Needs a RagdollSolver; no effect without it.
     double selfContactCap = 10;
 
