@@ -395,6 +395,7 @@ class JointTree {
     };
     // Lays the tree out once per pass from the joints' endpoints; false when there is nothing to solve.
     bool build(std::span<const Joint> joints, int bodies) {
+        m_afterValid = false;
         m_bodies = bodies;
         std::vector<int>& root = m_root;
         root.resize(static_cast<std::size_t>(bodies));
@@ -472,12 +473,16 @@ class JointTree {
     template <typename RowsOf>
     bool step(std::vector<Side>& sides, RowsOf rowsOf) {
         const int bodies = m_bodies;
+        // After an accepted step the bodies are where it measured its error: its rows are this step's.
+        const bool reuse = m_afterValid;
+        m_afterValid = false;
+        if (reuse) std::swap(m_rows, m_after);
         m_rows.resize(m_joints.size());
         m_after.resize(m_joints.size());
         m_dims.assign(m_parent.size(), 6);
         bool open = false;
         for (std::size_t k = 0; k < m_joints.size(); ++k) {
-            m_rows[k] = rowsOf(m_joints[k]);
+            if (!reuse) m_rows[k] = rowsOf(m_joints[k]);
             const Rows& r = m_rows[k];
             m_dims[static_cast<std::size_t>(bodies) + k] = 3 + r.angular;
             open = open || (r.anchorB - r.anchorA).length2() > kAnchorToleranceM * kAnchorToleranceM;
@@ -553,7 +558,10 @@ class JointTree {
                      btVector3(btScalar(dx[3]), btScalar(dx[4]), btScalar(dx[5])) * f);
             }
             for (std::size_t k = 0; k < m_joints.size(); ++k) m_after[k] = rowsOf(m_joints[k]);
-            if (error(m_after) < before) return true;
+            if (error(m_after) < before) {
+                m_afterValid = true;
+                return true;
+            }
             for (std::size_t x = 0; x < sides.size(); ++x) sides[x] = m_saved[x];
             if (scale <= 0.25) return false;
         }
@@ -577,6 +585,7 @@ class JointTree {
     std::vector<std::vector<int>> m_jointsAt;
     std::vector<int> m_parent, m_dims;
     std::vector<Rows> m_rows, m_after;
+    bool m_afterValid = false; // m_after holds the rows at the bodies' current poses
     std::vector<Side> m_saved;
     BlockTree m_tree;
     std::vector<double> m_rhs;
