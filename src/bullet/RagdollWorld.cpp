@@ -112,6 +112,8 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     // from zero otherwise: a figure standing on its feet then sinks while 20 iterations rebuild its weight).
     if (m.warmStarting) info.m_solverMode |= SOLVER_USE_WARMSTARTING | SOLVER_USE_ARTICULATED_WARMSTARTING;
     else info.m_solverMode &= ~(SOLVER_USE_WARMSTARTING | SOLVER_USE_ARTICULATED_WARMSTARTING);
+    if (m.frictionDirections >= 2) info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
+    else info.m_solverMode &= ~SOLVER_USE_2_FRICTION_DIRECTIONS;
     if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver()))
         solver->setDirectJoints(m.directJoints);
     // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.

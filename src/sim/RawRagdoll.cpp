@@ -25,6 +25,7 @@ bullet::Method rawMethod() {
     m.jointErp = 0.2;
     m.warmStarting = true;
     m.warmStartingFactor = 0.85;
+    m.frictionDirections = 1; // one friction row per contact point (SOLVER_USE_2_FRICTION_DIRECTIONS unset)
     // btDefaultCollisionConfiguration's default: one new contact point per step on a plane.
     m.multipointContacts = false;
     // btTypedConstraint's default: the world's iterations; btHinge/btConeTwist setLimit's default bias 0.3.

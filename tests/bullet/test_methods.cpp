@@ -562,6 +562,48 @@ TEST_CASE("multipoint and speculative contacts: a falling box stops at the groun
     CHECK(peakDepth(both) < 0.005);
 }
 
+TEST_CASE("friction directions: a box on the ground pulled by a joint below its friction bound stays with two",
+          "[bullet][methods]") {
+    // Bullet's default friction is one row per contact point, along the point's sliding velocity before the solve,
+    // or along an arbitrary tangent when it does not slide. A pull that arises inside the solve (here a joint's
+    // motor drawing a resting box sideways with 30 % of what static friction can hold) is then met by friction
+    // only in the steps after the box has started to slide along it: the box creeps. With both tangents
+    // (Method::frictionDirections 2) static friction holds it where it lies.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
+                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
+                                                  "0, 4 ) density 0.02 }\n}\n",
+                                                  joints);
+    REQUIRE(built.figure);
+    auto slid = [&](int directions) {
+        Method method = methodWith("multipoint-contacts", "on");
+        method.frictionDirections = directions;
+        afb::sim::Scene scene(method);
+        auto& box = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        btRigidBody& body = box.body(0);
+        body.setActivationState(DISABLE_DEACTIVATION);
+        for (int i = 0; i < 30; ++i) scene.step(1.0 / 60.0); // settle on its four corners
+        const btVector3 start = body.getCenterOfMassPosition();
+        // Every axis free; a motor along x with a force bound of 0.3 of the friction bound μ·m·g (μ = 0.8).
+        btGeneric6DofSpring2Constraint pull(body, btTransform::getIdentity());
+        pull.setLinearLowerLimit(btVector3(1, 1, 1));
+        pull.setLinearUpperLimit(btVector3(-1, -1, -1));
+        pull.setAngularLowerLimit(btVector3(1, 1, 1));
+        pull.setAngularUpperLimit(btVector3(-1, -1, -1));
+        pull.enableMotor(0, true);
+        pull.setTargetVelocity(0, 1);
+        pull.setMaxMotorForce(0, btScalar(0.3 * 0.8 * 9.81) / body.getInvMass());
+        scene.world().addConstraint(&pull);
+        for (int i = 0; i < 60; ++i) scene.step(1.0 / 60.0);
+        scene.world().removeConstraint(&pull);
+        return double((body.getCenterOfMassPosition() - start).length());
+    };
+    const double one = slid(1), two = slid(2);
+    INFO("one direction: " << one * 1000 << " mm, two: " << two * 1000 << " mm");
+    CHECK(one > 0.005);
+    CHECK(two < 0.0005);
+}
+
 TEST_CASE("vertex contacts: a box's manifold holds the corners it rests and rolls on", "[bullet][methods]") {
     // A 16 × 16 × 8-unit box (0.406 × 0.406 × 0.203 m). Lying flat on the ground, its four bottom corners are
     // the contact points, at distance 0. Tilted by 10° about X onto one bottom edge, the two corners of that edge

@@ -24,7 +24,7 @@ set(expected_columns
     max_limit_violation_deg worst_limit_joint max_penetration_m worst_contact rest_penetration_m max_energy_gain_j
     max_speed_mps exploded exploded_at_s non_finite settle_time_s method.backend method.substeps method.iterations
     method.joint-iterations method.solver-tolerance method.split-impulse method.contact-erp method.joint-erp method.limit-erp
-    method.warm-starting method.warm-starting-factor method.position-iterations method.position-tree method.position-velocity method.multipoint-contacts
+    method.warm-starting method.warm-starting-factor method.friction-directions method.position-iterations method.position-tree method.position-velocity method.multipoint-contacts
     method.speculative-contacts method.self-contact-cap method.speculative-limits method.ccd method.joint-warm-starting
     method.limit-warm-starting method.direct-joints method.merge-fixed)
 string(REPLACE "," ";" columns "${header}")

@@ -55,6 +55,7 @@ TEST_CASE("raw: the method is Bullet's defaults and none of afbullet's technique
     CHECK(m.jointErp == Approx(bulletDefaults.m_erp));
     CHECK(m.warmStarting == ((bulletDefaults.m_solverMode & SOLVER_USE_WARMSTARTING) != 0));
     CHECK(m.warmStartingFactor == Approx(bulletDefaults.m_warmstartingFactor));
+    CHECK(m.frictionDirections == ((bulletDefaults.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) ? 2 : 1));
     CHECK(m.substeps == 1);
     CHECK(m.jointIterations == 0);
     CHECK(m.positionIterations == 0);

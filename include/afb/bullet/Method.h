@@ -59,6 +59,12 @@ struct Method {
     bool warmStarting = true;
     /// That fraction (btContactSolverInfo::m_warmstartingFactor).
     double warmStartingFactor = 0.85;
+    /// Friction rows per contact point: 1 (Bullet's default: one row along the sliding direction, or along an
+    /// arbitrary tangent when the point barely moves, so nothing holds the other tangent) or 2 (both tangents,
+    /// SOLVER_USE_2_FRICTION_DIRECTIONS). With one, a resting limb under `directJoints` was kicked to 1–2 rad/s
+    /// every few steps and never came to rest (README: Methods). 2 in exact and multibody (Bullet's multibody
+    /// world sets it itself); the iterative presets lose stress runs with it (their 100 m and 15 Hz drops).
+    int frictionDirections = 1;
     /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
     /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world. A multibody ragdoll
