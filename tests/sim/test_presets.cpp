@@ -35,7 +35,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
         {"fast", 0.025, 16, 0.005},    // measured 21.5 mm, 13.3°, 2.7 mm (4 figures × 4 yaws: 14°)
         {"default", 0.024, 13, 0.005}, // 19.9 mm, 10.0°, 2.7 mm (11°)
         {"accurate", 0.012, 5, 0.005}, // 8.8 mm, 3.4°, 2.3 mm (4.5°)
-        {"exact", 0.001, 2, 0.005},    // 0.1 mm, 0.6° (direct joint solve, tree position step with limits), 2.5 mm
+        {"exact", 0.001, 2, 0.005},    // 0.1 mm, 0.02°, 0.3 mm (direct joint solve, tree position step with limits)
     };
     afb::sim::DropOptions o;
     o.heightM = 1.0;
