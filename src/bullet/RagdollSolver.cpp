@@ -387,7 +387,7 @@ bool RagdollSolver::buildDirect() {
             // Joint friction (a row bounded on both sides: ±friction · the joint's last reaction) keeps Bullet's
             // response as contact friction does; limits (bounded on one side) move the whole group. Through the
             // group it was a third of the columns to solve each step and held nothing better: without it `exact`
-            // costs 19 % less and passes more of the stress matrix (README: Methods, point 16).
+            // costs 19 % less and passes more of the stress matrix (README: Methods, point 17).
             const btSolverConstraint& c = pool[j];
             const bool jointFriction = c.m_lowerLimit < 0 && c.m_upperLimit > 0 && c.m_upperLimit < unbounded;
             addFree(d.nonContact, pool[j], !jointFriction);
