@@ -116,6 +116,11 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     else info.m_solverMode &= ~SOLVER_USE_2_FRICTION_DIRECTIONS;
     if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver()))
         solver->setDirectJoints(m.directJoints);
+    // The direct solve takes a batch of islands (Bullet batches small islands up to m_minimumSolverBatchSize
+    // constraints) through its own path when a ragdoll is in it and through Bullet's otherwise, and the two round
+    // differently: a game's box alone in its island then moved by 10⁻⁸ m differently when a ragdoll elsewhere
+    // froze. One island per solve keeps every island's result independent of the others (README: Methods).
+    if (m.directJoints) info.m_minimumSolverBatchSize = 1;
     // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.
     if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(world.getDispatcher()))
         if (auto* config = dynamic_cast<btDefaultCollisionConfiguration*>(dispatcher->getCollisionConfiguration())) {
