@@ -31,6 +31,18 @@ afb::figure::Figure armFigure(const std::string& constraint) {
     return *built.figure;
 }
 
+// One 16 × 16 × 8-unit box (0.406 × 0.406 × 0.203 m, density 0.02) with its lowest face at the entity's origin.
+afb::figure::Figure boxFigure() {
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
+    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
+                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
+                                                  "0, 4 ) density 0.02 }\n}\n",
+                                                  joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    return *built.figure;
+}
+
 // A scene without ground holding one ragdoll of `figure`, rest rules off.
 struct ArmScene {
     afb::sim::Scene scene;
@@ -537,17 +549,12 @@ TEST_CASE("multipoint and speculative contacts: a falling box stops at the groun
     // only within a few millimetres of the surface, and then one point of the flat face: the box lands on a
     // corner, tips and sinks by most of a step's travel. Multipoint contacts fill the face at first touch;
     // speculative contacts find it from a step away, so the box stops at the surface.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
-                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-                                                  "0, 4 ) density 0.02 }\n}\n",
-                                                  joints);
-    REQUIRE(built.figure);
+    const afb::figure::Figure boxFig = boxFigure();
     auto peakDepth = [&](const Method& method) {
         afb::sim::Scene scene(method);
         btTransform t = btTransform::getIdentity();
         t.setOrigin(btVector3(0, 0, btScalar(1.0 + 0.043))); // lowest point ~1 m up, 3 cm off the step grid
-        scene.spawn(RagdollAsset::create(*built.figure), {.entityTransform = t, .comeToRest = false});
+        scene.spawn(RagdollAsset::create(boxFig), {.entityTransform = t, .comeToRest = false});
         double worst = 0;
         for (int i = 0; i < 60; ++i) {
             scene.step(1.0 / 60.0);
@@ -569,17 +576,12 @@ TEST_CASE("friction directions: a box on the ground pulled by a joint below its 
     // motor drawing a resting box sideways with 30 % of what static friction can hold) is then met by friction
     // only in the steps after the box has started to slide along it: the box creeps. With both tangents
     // (Method::frictionDirections 2) static friction holds it where it lies.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
-                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-                                                  "0, 4 ) density 0.02 }\n}\n",
-                                                  joints);
-    REQUIRE(built.figure);
+    const afb::figure::Figure boxFig = boxFigure();
     auto slid = [&](int directions) {
         Method method = methodWith("multipoint-contacts", "on");
         method.frictionDirections = directions;
         afb::sim::Scene scene(method);
-        auto& box = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        auto& box = scene.spawn(RagdollAsset::create(boxFig), {.comeToRest = false});
         btRigidBody& body = box.body(0);
         body.setActivationState(DISABLE_DEACTIVATION);
         for (int i = 0; i < 30; ++i) scene.step(1.0 / 60.0); // settle on its four corners
@@ -609,16 +611,11 @@ TEST_CASE("vertex contacts: a box's manifold holds the corners it rests and roll
     // the contact points, at distance 0. Tilted by 10° about X onto one bottom edge, the two corners of that edge
     // touch and the two of the far bottom edge are w·sin 10° = 70.5 mm up: with a speculative reach that long,
     // those are the next two points, so the solver can stop the box's roll onto its face.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
-                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-                                                  "0, 4 ) density 0.02 }\n}\n",
-                                                  joints);
-    REQUIRE(built.figure);
+    const afb::figure::Figure boxFig = boxFigure();
     const double half = 8 * kUnit, halfHeight = 4 * kUnit, tilt = 10 * kDeg;
     auto manifoldAt = [&](const btTransform& pose, btScalar reach) {
         afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
-        auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        auto& r = scene.spawn(RagdollAsset::create(boxFig), {.comeToRest = false});
         r.body(0).setCenterOfMassTransform(pose);
         scene.world().performDiscreteCollisionDetection(); // creates the pair's manifold
         btDispatcher* d = scene.world().getDispatcher();
@@ -706,17 +703,12 @@ TEST_CASE("vertex contacts: a box slapping down onto its face stops at the groun
     // about ω·w = 16 m/s, 27 cm per step at 60 Hz. At 30° the corners of the side face are nearer the ground
     // than those of the far edge, so only a choice that looks at where the corners go in this step keeps the
     // far edge among the manifold's four points and stops it at the ground.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
-                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-                                                  "0, 4 ) density 0.02 }\n}\n",
-                                                  joints);
-    REQUIRE(built.figure);
+    const afb::figure::Figure boxFig = boxFigure();
     auto peakDepth = [&](bool vertexContacts) {
         Method m = methodWith("speculative-contacts", "on");
         m.multipointContacts = vertexContacts;
         afb::sim::Scene scene(m);
-        auto& r = scene.spawn(RagdollAsset::create(*built.figure), {.comeToRest = false});
+        auto& r = scene.spawn(RagdollAsset::create(boxFig), {.comeToRest = false});
         const btQuaternion q(btVector3(1, 0, 0), btScalar(30 * kDeg));
         const btVector3 lowest = btMatrix3x3(q) * btVector3(0, btScalar(-8 * kUnit), btScalar(-4 * kUnit));
         r.body(0).setCenterOfMassTransform(btTransform(q, btVector3(0, 0, -lowest.z())));
