@@ -3,7 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <Eigen/Dense>
 
@@ -40,6 +45,17 @@ SideJ sideA(const btSolverConstraint& c, const btSolverBody& b) {
 SideJ sideB(const btSolverConstraint& c, const btSolverBody& b) {
     return {c.m_contactNormal2, c.m_relpos2CrossNormal, c.m_contactNormal2 * b.internalGetInvMass(),
             c.m_angularComponentB};
+}
+
+// v += u · s over x, y and z, rounded as btVector3's `v += u * s` rounds (a product, then a sum, per component):
+// with SSE the four lanes at once (the fourth is btVector3's padding, which no operation reads).
+inline void addScaled(btVector3& v, const btVector3& u, btScalar s) {
+#if defined(__SSE2__) && !defined(BT_USE_DOUBLE_PRECISION)
+    _mm_storeu_ps(v.m_floats,
+                  _mm_add_ps(_mm_loadu_ps(v.m_floats), _mm_mul_ps(_mm_loadu_ps(u.m_floats), _mm_set1_ps(s))));
+#else
+    v += u * s;
+#endif
 }
 
 double dot(const SideJ& row, const SideJ& other) { // J_row · M⁻¹ J_otherᵀ at a shared body
@@ -96,10 +112,30 @@ struct RagdollSolver::Direct {
         double cfmVel = 0;           // the row's cfm in velocity units
         double plain = 0;            // J M⁻¹ Jᵀ of the touching bodies alone (the row's scale)
         btScalar start = 0;          // the row's impulse before the iterations (warm start)
+        bool pending = false;        // its responses through the groups are not computed yet (complete())
     };
 
     static bool layOut(Group& group);
     static bool factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool, double epsilon);
+    // A row's response through one group whose tree is factored (side s's slot; withA, withB: which of its
+    // bodies are in the group), its part of Jᵣ u added to the row's invEffectiveMass (still the sum w).
+    void treeColumn(FreeRow& fr, int s, bool withA, bool withB, const btAlignedObjectArray<btSolverBody>& bodyPool);
+    // The row's effective mass from w, the sum of its parts.
+    static void finish(FreeRow& fr);
+    // Appends the response in `response` (6 per group body) to `responses` as side s's, and its Jᵣ u to the
+    // row's w.
+    void keepResponse(FreeRow& fr, int s, int xa, const SideJ& sa, int xb, const SideJ& sb, std::size_t nb);
+    // A pending row's responses through every group it touches, and its effective mass.
+    void complete(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool);
+    // Whether a row update ends with no change whatever the row's effective mass: the velocity still to go
+    // pushes the impulse past a bound of 0 it already sits at (a contact or limit not touching), or there is
+    // none left to go. Only rows bounded at 0 are decided this way, so that the result is the one the full
+    // update gives bit for bit.
+    static bool heldAtZeroBound(double toGo, double applied, double lower, double upper) {
+        if (toGo < 0) return applied == 0 && lower == 0;
+        if (toGo > 0) return applied == 0 && upper == 0;
+        return toGo == 0 && applied >= lower && applied <= upper;
+    }
 
     bool enabled = false;
     // The groups of this step are the first `used`; the others wait, with their buffers, for a later step.
@@ -404,7 +440,11 @@ bool RagdollSolver::buildDirect() {
     }
     for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j)
         addFree(d.friction, m_tmpSolverContactFrictionConstraintPool[j], false);
-    // Per group, the columns J M⁻¹ Jᵣᵀ of every free row touching it, solved in one batch: Y = (A + C)⁻¹ G.
+    // Per group, the columns J M⁻¹ Jᵣᵀ of the free rows touching it. A row that touches only groups factored
+    // along their trees waits until an update first needs its effective mass (complete()): a contact or limit row
+    // that stays apart for the whole solve never pays for its responses (46 % of the columns of `exact`'s
+    // 4-humanoid drop; README: Methods, point 18). A row touching a densely factored group is solved here, with
+    // that group's other columns, in one batch.
     std::vector<std::vector<Direct::Column>>& columns = d.columns;
     if (columns.size() < d.used) columns.resize(d.used);
     for (std::size_t g = 0; g < d.used; ++g) columns[g].clear();
@@ -415,6 +455,7 @@ bool RagdollSolver::buildDirect() {
             fr.cfmVel = double(c.m_cfm) / double(c.m_jacDiagABInv);
             double w = fr.cfmVel;
             fr.plain = 1.0 / double(c.m_jacDiagABInv);
+            bool treesOnly = true, throughGroup = false;
             for (int s = 0; s < 2; ++s) {
                 const int g = fr.group[s];
                 if (g < 0) { // a body of no group: Bullet's own response
@@ -423,39 +464,53 @@ bool RagdollSolver::buildDirect() {
                     w += dot(side, side);
                     continue;
                 }
-                if (s == 1 && fr.group[0] == g) continue; // one response covers both sides
+                throughGroup = true;
+                treesOnly = treesOnly && d.groups[static_cast<std::size_t>(g)].useTree;
+            }
+            fr.invEffectiveMass = w; // completed below, or by complete()
+            if (!throughGroup) {
+                Direct::finish(fr);
+                continue;
+            }
+            if (treesOnly) {
+                fr.pending = true;
+                continue;
+            }
+            for (int s = 0; s < 2; ++s) {
+                const int g = fr.group[s];
+                if (g < 0 || (s == 1 && fr.group[0] == g)) continue; // one response covers both sides
                 columns[static_cast<std::size_t>(g)].push_back({&fr, s, fr.group[0] == g, fr.group[1] == g});
             }
-            fr.invEffectiveMass = w; // completed below
         }
-    std::vector<double>& x = d.solveX;
     for (std::size_t g = 0; g < d.used; ++g) {
         Direct::Group& group = d.groups[g];
         const std::vector<Direct::Column>& cols = columns[g];
         if (cols.empty()) continue; // no other row touches the group (Eigen's solve of a 0-column matrix is UB)
+        if (group.useTree) {
+            for (const Direct::Column& col : cols)
+                d.treeColumn(*col.row, col.side, col.withA, col.withB, m_tmpSolverBodyPool);
+            continue;
+        }
         const Eigen::Index k = static_cast<Eigen::Index>(group.rows.size());
         const std::size_t nb = group.bodies.size();
-        // The dense path's right-hand sides, J M⁻¹ Jᵣᵀ per column, solved in one batch.
-        Mat y;
-        if (!group.useTree) {
-            Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
-            for (std::size_t col = 0; col < cols.size(); ++col) {
-                const btSolverConstraint& c = *cols[col].row->c;
-                auto gather = [&](int xb, const SideJ& rs) {
-                    for (const auto& [i, si] : group.rowsAt[static_cast<std::size_t>(xb)]) {
-                        const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
-                        gm(i, static_cast<Eigen::Index>(col)) += dot(si ? jr.b : jr.a, rs);
-                    }
-                };
-                if (cols[col].withA)
-                    gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)],
-                           sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]));
-                if (cols[col].withB)
-                    gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)],
-                           sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]));
-            }
-            y = group.ldlt.solve(gm);
+        // The right-hand sides J M⁻¹ Jᵣᵀ, one per column, solved in one batch.
+        Mat gm = Mat::Zero(k, static_cast<Eigen::Index>(cols.size()));
+        for (std::size_t col = 0; col < cols.size(); ++col) {
+            const btSolverConstraint& c = *cols[col].row->c;
+            auto gather = [&](int xb, const SideJ& rs) {
+                for (const auto& [i, si] : group.rowsAt[static_cast<std::size_t>(xb)]) {
+                    const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                    gm(i, static_cast<Eigen::Index>(col)) += dot(si ? jr.b : jr.a, rs);
+                }
+            };
+            if (cols[col].withA)
+                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdA)],
+                       sideA(c, m_tmpSolverBodyPool[c.m_solverBodyIdA]));
+            if (cols[col].withB)
+                gather(d.localOf[static_cast<std::size_t>(c.m_solverBodyIdB)],
+                       sideB(c, m_tmpSolverBodyPool[c.m_solverBodyIdB]));
         }
+        const Mat y = group.ldlt.solve(gm);
         for (std::size_t col = 0; col < cols.size(); ++col) {
             Direct::FreeRow& fr = *cols[col].row;
             const btSolverConstraint& c = *fr.c;
@@ -470,64 +525,97 @@ bool RagdollSolver::buildDirect() {
             // u = M⁻¹Jᵣᵀ − M⁻¹Jᵀ y, per group body
             d.response.assign(6 * nb, 0.0);
             double* u = d.response.data();
-            if (group.useTree) {
-                // H [u; λ] = [Jᵣᵀ; 0]: u is the response, λ = −y the joints' reaction.
-                x.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
-                auto put = [&](int xb2, const SideJ& rs) {
-                    for (int q = 0; q < 3; ++q) {
-                        x[static_cast<std::size_t>(6 * xb2 + q)] += double(rs.lin[q]);
-                        x[static_cast<std::size_t>(6 * xb2 + 3 + q)] += double(rs.ang[q]);
-                    }
-                };
-                if (xa >= 0) put(xa, sa);
-                if (xb >= 0) put(xb, sb);
-                group.tree.solve(x.data());
-                std::copy(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(6 * nb), u);
-                for (Eigen::Index i = 0; i < k; ++i)
-                    reaction[i] = -x[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
-            } else {
-                const Eigen::Index ci = static_cast<Eigen::Index>(col);
-                for (Eigen::Index i = 0; i < k; ++i) reaction[i] = y(i, ci);
-                auto add = [&](int xb2, const btVector3& lin, const btVector3& ang, double f) {
-                    for (int q = 0; q < 3; ++q) {
-                        u[6 * xb2 + q] += f * double(lin[q]);
-                        u[6 * xb2 + 3 + q] += f * double(ang[q]);
-                    }
-                };
-                if (xa >= 0) add(xa, sa.linInv, sa.angInv, 1);
-                if (xb >= 0) add(xb, sb.linInv, sb.angInv, 1);
-                for (Eigen::Index i = 0; i < k; ++i) {
-                    const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
-                    if (jr.bodyA >= 0) add(jr.bodyA, jr.a.linInv, jr.a.angInv, -reaction[i]);
-                    if (jr.bodyB >= 0) add(jr.bodyB, jr.b.linInv, jr.b.angInv, -reaction[i]);
+            const Eigen::Index ci = static_cast<Eigen::Index>(col);
+            for (Eigen::Index i = 0; i < k; ++i) reaction[i] = y(i, ci);
+            auto add = [&](int xb2, const btVector3& lin, const btVector3& ang, double f) {
+                for (int q = 0; q < 3; ++q) {
+                    u[6 * xb2 + q] += f * double(lin[q]);
+                    u[6 * xb2 + 3 + q] += f * double(ang[q]);
                 }
-            }
-            auto jdotu = [&](int xb2, const SideJ& rs) {
-                double v = 0;
-                for (int q = 0; q < 3; ++q)
-                    v += double(rs.lin[q]) * u[6 * xb2 + q] + double(rs.ang[q]) * u[6 * xb2 + 3 + q];
-                return v;
             };
-            if (xa >= 0) fr.invEffectiveMass += jdotu(xa, sa);
-            if (xb >= 0) fr.invEffectiveMass += jdotu(xb, sb);
-            // Stored in Bullet's precision and layout: the iterations apply it as Bullet applies its own.
-            fr.response[s] = static_cast<int>(d.responses.size());
-            for (std::size_t xb2 = 0; xb2 < nb; ++xb2) {
-                const double* ux = u + 6 * xb2;
-                d.responses.emplace_back(btScalar(ux[0]), btScalar(ux[1]), btScalar(ux[2]));
-                d.responses.emplace_back(btScalar(ux[3]), btScalar(ux[4]), btScalar(ux[5]));
+            if (xa >= 0) add(xa, sa.linInv, sa.angInv, 1);
+            if (xb >= 0) add(xb, sb.linInv, sb.angInv, 1);
+            for (Eigen::Index i = 0; i < k; ++i) {
+                const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+                if (jr.bodyA >= 0) add(jr.bodyA, jr.a.linInv, jr.a.angInv, -reaction[i]);
+                if (jr.bodyB >= 0) add(jr.bodyB, jr.b.linInv, jr.b.angInv, -reaction[i]);
             }
+            d.keepResponse(fr, s, xa, sa, xb, sb, nb);
         }
     }
     for (auto* list : {&d.nonContact, &d.contact, &d.friction})
-        for (Direct::FreeRow& fr : *list) {
-            if (fr.c->m_jacDiagABInv == 0) continue;
-            // A row the joints already hold (friction about a locked axis, a limit on a locked direction) has no
-            // effective mass left, only rounding: it is skipped rather than given an impulse of 1/rounding.
-            const double w = fr.invEffectiveMass; // the effective mass's inverse, summed above
-            fr.invEffectiveMass = w > 1e-6 * std::abs(fr.plain) ? 1.0 / w : 0.0;
-        }
+        for (Direct::FreeRow& fr : *list)
+            if (!fr.pending && fr.c->m_jacDiagABInv != 0 && (fr.group[0] >= 0 || fr.group[1] >= 0)) Direct::finish(fr);
     return true;
+}
+
+void RagdollSolver::Direct::keepResponse(FreeRow& fr, int s, int xa, const SideJ& sa, int xb, const SideJ& sb,
+                                         std::size_t nb) {
+    const double* u = response.data();
+    auto jdotu = [&](int x, const SideJ& rs) {
+        double v = 0;
+        for (int q = 0; q < 3; ++q) v += double(rs.lin[q]) * u[6 * x + q] + double(rs.ang[q]) * u[6 * x + 3 + q];
+        return v;
+    };
+    if (xa >= 0) fr.invEffectiveMass += jdotu(xa, sa);
+    if (xb >= 0) fr.invEffectiveMass += jdotu(xb, sb);
+    // Stored in Bullet's precision and layout: the iterations apply it as Bullet applies its own.
+    fr.response[s] = static_cast<int>(responses.size());
+    for (std::size_t x = 0; x < nb; ++x) {
+        const double* ux = u + 6 * x;
+        responses.emplace_back(btScalar(ux[0]), btScalar(ux[1]), btScalar(ux[2]));
+        responses.emplace_back(btScalar(ux[3]), btScalar(ux[4]), btScalar(ux[5]));
+    }
+}
+
+void RagdollSolver::Direct::treeColumn(FreeRow& fr, int s, bool withA, bool withB,
+                                       const btAlignedObjectArray<btSolverBody>& bodyPool) {
+    Group& group = groups[static_cast<std::size_t>(fr.group[s])];
+    const btSolverConstraint& c = *fr.c;
+    const std::size_t nb = group.bodies.size();
+    const int k = static_cast<int>(group.rows.size());
+    const int xa = withA ? localOf[static_cast<std::size_t>(c.m_solverBodyIdA)] : -1;
+    const int xb = withB ? localOf[static_cast<std::size_t>(c.m_solverBodyIdB)] : -1;
+    const SideJ sa = sideA(c, bodyPool[c.m_solverBodyIdA]);
+    const SideJ sb = sideB(c, bodyPool[c.m_solverBodyIdB]);
+    // H [u; λ] = [Jᵣᵀ; 0]: u is the response, λ = −y the joints' reaction.
+    std::vector<double>& x = solveX;
+    x.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
+    auto put = [&](int xb2, const SideJ& rs) {
+        for (int q = 0; q < 3; ++q) {
+            x[static_cast<std::size_t>(6 * xb2 + q)] += double(rs.lin[q]);
+            x[static_cast<std::size_t>(6 * xb2 + 3 + q)] += double(rs.ang[q]);
+        }
+    };
+    if (xa >= 0) put(xa, sa);
+    if (xb >= 0) put(xb, sb);
+    group.tree.solve(x.data());
+    fr.reaction[s] = static_cast<int>(reactions.size());
+    reactions.resize(reactions.size() + static_cast<std::size_t>(k));
+    double* reaction = reactions.data() + fr.reaction[s];
+    for (int i = 0; i < k; ++i) reaction[i] = -x[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
+    response.assign(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(6 * nb));
+    keepResponse(fr, s, xa, sa, xb, sb, nb);
+}
+
+void RagdollSolver::Direct::finish(FreeRow& fr) {
+    // A row the joints already hold (friction about a locked axis, a limit on a locked direction) has no
+    // effective mass left, only rounding: it is skipped rather than given an impulse of 1/rounding.
+    const double w = fr.invEffectiveMass; // the effective mass's inverse, summed
+    fr.invEffectiveMass = w > 1e-6 * std::abs(fr.plain) ? 1.0 / w : 0.0;
+}
+
+void RagdollSolver::Direct::complete(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool) {
+    // In the order of the groups, as the batch of buildDirect sums a row's parts.
+    const bool swap = fr.group[0] >= 0 && fr.group[1] >= 0 && fr.group[1] < fr.group[0];
+    for (int i = 0; i < 2; ++i) {
+        const int s = swap ? 1 - i : i;
+        const int g = fr.group[s];
+        if (g < 0 || (s == 1 && fr.group[0] == g)) continue;
+        treeColumn(fr, s, fr.group[0] == g, fr.group[1] == g, bodyPool);
+    }
+    finish(fr);
+    fr.pending = false;
 }
 
 btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal) {
@@ -588,12 +676,21 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
         }
     }
     // One free row: Bullet's update with the effective mass and the response of the whole group.
+    btSolverBody* const bodies = &m_tmpSolverBodyPool[0];
     auto resolve = [&](Direct::FreeRow& fr) {
         btSolverConstraint& c = *fr.c;
-        if (fr.invEffectiveMass == 0) return;
+        if (!fr.pending && fr.invEffectiveMass == 0) return;
         const double target =
             (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
-        double dl = (target - relVel(c)) * fr.invEffectiveMass;
+        const double toGo = target - relVel(c);
+        if (fr.pending) {
+            if (Direct::heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit),
+                                        double(c.m_upperLimit)))
+                return;
+            d.complete(fr, m_tmpSolverBodyPool);
+            if (fr.invEffectiveMass == 0) return;
+        }
+        double dl = toGo * fr.invEffectiveMass;
         const double sum = double(c.m_appliedImpulse) + dl;
         if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
         else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
@@ -617,10 +714,11 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
             Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
             const btVector3* u = d.responses.data() + fr.response[s];
             const btScalar impulse = btScalar(dl);
-            for (std::size_t x = 0; x < group.bodies.size(); ++x) {
-                btSolverBody& b = m_tmpSolverBodyPool[group.bodies[x]];
-                b.m_deltaLinearVelocity += u[2 * x] * impulse;
-                b.m_deltaAngularVelocity += u[2 * x + 1] * impulse;
+            const int* ids = group.bodies.data();
+            for (std::size_t x = 0, n = group.bodies.size(); x < n; ++x) {
+                btSolverBody& b = bodies[ids[x]];
+                addScaled(b.m_deltaLinearVelocity, u[2 * x], impulse);
+                addScaled(b.m_deltaAngularVelocity, u[2 * x + 1], impulse);
             }
             if (group.soft) {
                 const double* y = d.reactions.data() + fr.reaction[s];
@@ -660,7 +758,7 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
         double residual = 0;
         for (Direct::FreeRow& fr : d.contact) {
             btSolverConstraint& c = *fr.c;
-            if (fr.invEffectiveMass == 0 || c.m_rhsPenetration == 0) continue;
+            if ((!fr.pending && fr.invEffectiveMass == 0) || c.m_rhsPenetration == 0) continue;
             const btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
             const btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
             const double rel =
@@ -668,7 +766,16 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
                        c.m_contactNormal2.dot(b.m_pushVelocity) + c.m_relpos2CrossNormal.dot(b.m_turnVelocity));
             const double target = (double(c.m_rhsPenetration) - double(c.m_cfm) * double(c.m_appliedPushImpulse)) /
                                   double(c.m_jacDiagABInv);
-            double dl = (target - rel) * fr.invEffectiveMass;
+            const double toGo = target - rel;
+            if (fr.pending) {
+                // The push impulse has no upper bound.
+                if (Direct::heldAtZeroBound(toGo, double(c.m_appliedPushImpulse), double(c.m_lowerLimit),
+                                            std::numeric_limits<double>::infinity()))
+                    continue;
+                d.complete(fr, m_tmpSolverBodyPool);
+                if (fr.invEffectiveMass == 0) continue;
+            }
+            double dl = toGo * fr.invEffectiveMass;
             if (double(c.m_appliedPushImpulse) + dl < double(c.m_lowerLimit))
                 dl = double(c.m_lowerLimit) - double(c.m_appliedPushImpulse);
             if (dl == 0) continue;
@@ -693,8 +800,8 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
                 const btScalar impulse = btScalar(dl);
                 for (std::size_t x = 0; x < group.bodies.size(); ++x) {
                     btSolverBody& body = m_tmpSolverBodyPool[group.bodies[x]];
-                    body.m_pushVelocity += u[2 * x] * impulse;
-                    body.m_turnVelocity += u[2 * x + 1] * impulse;
+                    addScaled(body.m_pushVelocity, u[2 * x], impulse);
+                    addScaled(body.m_turnVelocity, u[2 * x + 1], impulse);
                 }
             }
         }
