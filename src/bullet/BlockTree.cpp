@@ -13,14 +13,16 @@ constexpr int kMaxDim = 24;  // a body is 6, a joint at most 6 rows per constrai
 constexpr int kUnrolled = 6; // blocks up to 6 × 6 get kernels of fixed size (a ragdoll's every block)
 
 // The solve's two steps at one node of dimension d (parent dp; dp = 0 for a root): forward, w = D⁻¹ x_i,
-// x_i = w, x_p −= Eᵀ w; backward, x_i −= G x_p. Fixed-size instances are unrolled by the compiler.
+// x_i = w, x_p −= Eᵀ w; backward, x_i −= G x_p. D⁻¹ and G are stored transposed (factor()), so that both products
+// run down contiguous columns, a lane per row (each row's sum is still taken in the order of its terms).
+// Fixed-size instances are unrolled by the compiler.
 template <int D, int P>
-void forwardFixed(const double* inverse, const double* e, double* xi, double* xp) {
-    double w[D];
-    for (int r = 0; r < D; ++r) {
-        double v = 0;
-        for (int q = 0; q < D; ++q) v += inverse[r * D + q] * xi[q];
-        w[r] = v;
+void forwardFixed(const double* __restrict inverseT, const double* __restrict e, double* __restrict xi,
+                  double* __restrict xp) {
+    double w[D] = {};
+    for (int q = 0; q < D; ++q) {
+        const double x = xi[q];
+        for (int r = 0; r < D; ++r) w[r] += inverseT[q * D + r] * x;
     }
     for (int r = 0; r < D; ++r) xi[r] = w[r];
     for (int q = 0; q < D; ++q)
@@ -28,32 +30,34 @@ void forwardFixed(const double* inverse, const double* e, double* xi, double* xp
 }
 
 template <int D, int P>
-void backwardFixed(const double* g, const double* xp, double* xi) {
-    for (int r = 0; r < D; ++r) {
-        double v = 0;
-        for (int c = 0; c < P; ++c) v += g[r * P + c] * xp[c];
-        xi[r] -= v;
+void backwardFixed(const double* __restrict gT, const double* __restrict xp, double* __restrict xi) {
+    double v[D] = {};
+    for (int c = 0; c < P; ++c) {
+        const double x = xp[c];
+        for (int r = 0; r < D; ++r) v[r] += gT[c * D + r] * x;
     }
+    for (int r = 0; r < D; ++r) xi[r] -= v[r];
 }
 
-void forwardAny(int d, int dp, const double* inverse, const double* e, double* xi, double* xp) {
-    double w[kMaxDim];
-    for (int r = 0; r < d; ++r) {
-        double v = 0;
-        for (int q = 0; q < d; ++q) v += inverse[r * d + q] * xi[q];
-        w[r] = v;
+void forwardAny(int d, int dp, const double* __restrict inverseT, const double* __restrict e, double* __restrict xi,
+                double* __restrict xp) {
+    double w[kMaxDim] = {};
+    for (int q = 0; q < d; ++q) {
+        const double x = xi[q];
+        for (int r = 0; r < d; ++r) w[r] += inverseT[q * d + r] * x;
     }
     std::copy(w, w + d, xi);
     for (int q = 0; q < d; ++q)
         for (int c = 0; c < dp; ++c) xp[c] -= e[q * dp + c] * w[q];
 }
 
-void backwardAny(int d, int dp, const double* g, const double* xp, double* xi) {
-    for (int r = 0; r < d; ++r) {
-        double v = 0;
-        for (int c = 0; c < dp; ++c) v += g[r * dp + c] * xp[c];
-        xi[r] -= v;
+void backwardAny(int d, int dp, const double* __restrict gT, const double* __restrict xp, double* __restrict xi) {
+    double v[kMaxDim] = {};
+    for (int c = 0; c < dp; ++c) {
+        const double x = xp[c];
+        for (int r = 0; r < d; ++r) v[r] += gT[c * d + r] * x;
     }
+    for (int r = 0; r < d; ++r) xi[r] -= v[r];
 }
 
 using Forward = void (*)(const double*, const double*, double*, double*);
@@ -211,6 +215,14 @@ void eliminate(const double* inverse, const double* e, double* g, double* parent
         }
 }
 
+// A row-major rows × cols block, transposed in place (cols × rows, row-major).
+void transpose(double* a, int rows, int cols) {
+    double t[kMaxDim * kMaxDim];
+    for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) t[c * rows + r] = a[r * cols + c];
+    std::copy(t, t + rows * cols, a);
+}
+
 using Invert = bool (*)(const double*, int, double*);
 using Eliminate = void (*)(const double*, const double*, double*, double*, int, int);
 
@@ -242,15 +254,18 @@ bool BlockTree::factor() {
                                              : invertDefinite<0>(pivot, d, pivot);
         if (!inverted) return false;
         const int p = m_parent[k];
-        if (p < 0) continue;
-        const int dp = m_dim[static_cast<std::size_t>(p)];
-        const double* e = m_blocks.data() + m_edgeAt[k];
-        double* g = m_gain.data() + m_gainAt[k];
-        double* parentPivot = m_blocks.data() + m_diagAt[static_cast<std::size_t>(p)];
-        if (d <= kUnrolled && dp <= kUnrolled)
-            kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot, d,
-                                                                                          dp);
-        else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
+        if (p >= 0) {
+            const int dp = m_dim[static_cast<std::size_t>(p)];
+            const double* e = m_blocks.data() + m_edgeAt[k];
+            double* g = m_gain.data() + m_gainAt[k];
+            double* parentPivot = m_blocks.data() + m_diagAt[static_cast<std::size_t>(p)];
+            if (d <= kUnrolled && dp <= kUnrolled)
+                kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot,
+                                                                                              d, dp);
+            else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
+            transpose(g, d, dp);
+        }
+        transpose(pivot, d, d); // solve()'s layout; the node's pivot is not read again here
     }
     return true;
 }
@@ -266,23 +281,23 @@ void BlockTree::solve(double* x) const {
         for (int r = 0; r < d && zero; ++r) zero = xi[r] == 0.0;
         if (zero) continue;
         double* xp = dp == 0 ? nullptr : x + s.parentOffset;
-        const double* inverse = blocks + s.diagAt;
+        const double* inverseT = blocks + s.diagAt;
         const double* e = blocks + s.edgeAt;
         if (d <= kUnrolled && dp <= kUnrolled)
-            kForward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](inverse, e, xi, xp);
-        else forwardAny(d, dp, inverse, e, xi, xp);
+            kForward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](inverseT, e, xi, xp);
+        else forwardAny(d, dp, inverseT, e, xi, xp);
     }
     // Backward (Lᵀ x = w): parents first, x_i −= G_i x_p.
     for (auto it = m_steps.rbegin(); it != m_steps.rend(); ++it) {
         const Step& s = *it;
         const int d = s.dim, dp = s.parentDim;
         if (dp == 0) continue;
-        const double* g = m_gain.data() + s.gainAt;
+        const double* gT = m_gain.data() + s.gainAt;
         const double* xp = x + s.parentOffset;
         double* xi = x + s.offset;
         if (d <= kUnrolled && dp <= kUnrolled)
-            kBackward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](g, xp, xi);
-        else backwardAny(d, dp, g, xp, xi);
+            kBackward[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp)](gT, xp, xi);
+        else backwardAny(d, dp, gT, xp, xi);
     }
 }
 

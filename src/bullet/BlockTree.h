@@ -31,8 +31,8 @@ class BlockTree {
     double* diag(int i) { return m_blocks.data() + m_diagAt[static_cast<std::size_t>(i)]; }
     double* toParent(int i) { return m_blocks.data() + m_edgeAt[static_cast<std::size_t>(i)]; }
 
-    /// Factors in place (the diagonal blocks become the pivots' inverses). False when a pivot is singular or not
-    /// finite (every pivot must be definite, of either sign: no pivoting is done).
+    /// Factors in place (the diagonal blocks become the pivots' inverses, stored transposed for solve()). False
+    /// when a pivot is singular or not finite (every pivot must be definite, of either sign: no pivoting is done).
     bool factor();
     /// Solves H x = b in place (x holds b on entry, laid out by offset()).
     void solve(double* x) const;
@@ -46,7 +46,7 @@ class BlockTree {
     std::vector<Step> m_steps;
     std::vector<int> m_dim, m_parent, m_offset, m_order; // m_order: every node after its children
     std::vector<std::size_t> m_diagAt, m_edgeAt, m_gainAt;
-    std::vector<double> m_blocks, m_gain;             // m_gain: D_i⁻¹ H_{i,p(i)} per edge, after factor()
+    std::vector<double> m_blocks, m_gain;             // m_gain: (D_i⁻¹ H_{i,p(i)})ᵀ per edge, after factor()
     std::vector<std::vector<int>> m_children;         // reset()'s scratch, kept for its capacity
     std::vector<std::pair<int, std::size_t>> m_stack; // (node, next child)
     int m_size = 0;
