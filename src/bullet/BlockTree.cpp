@@ -158,8 +158,9 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
 namespace {
 
 // The inverse of a symmetric definite (positive or negative) d × d matrix `a`, row-major, by LDLᵀ without
-// pivoting (a definite matrix needs none). False when a pivot is zero or not finite. `a` is read only until the
-// inverse is written, so the two may be the same block. D > 0: a fixed size (unrolled), D = 0: `n`.
+// pivoting (a definite matrix needs none), written transposed (solve()'s layout; the rounding need not leave it
+// symmetric). False when a pivot is zero or not finite. `a` is read only until the inverse is written, so the
+// two may be the same block. D > 0: a fixed size (unrolled), D = 0: `n`.
 template <int D>
 bool invertDefinite(const double* a, int n, double* inverse) {
     const int d = D > 0 ? D : n;
@@ -187,8 +188,8 @@ bool invertDefinite(const double* a, int n, double* inverse) {
         for (int i = 0; i < d; ++i) y[i] /= diag[i];
         for (int i = d - 1; i >= 0; --i) {
             double v = y[i];
-            for (int k = i + 1; k < d; ++k) v -= l[k * d + i] * inverse[k * d + c];
-            inverse[i * d + c] = v;
+            for (int k = i + 1; k < d; ++k) v -= l[k * d + i] * inverse[c * d + k];
+            inverse[c * d + i] = v; // transposed: column c of the inverse is row c here
         }
     }
     for (int k = 0; k < d * d; ++k)
@@ -196,31 +197,23 @@ bool invertDefinite(const double* a, int n, double* inverse) {
     return true;
 }
 
-// One child's elimination: G = D⁻¹ E (the backward pass's gain), and the parent's pivot loses Eᵀ G. D, P > 0:
-// fixed sizes (unrolled), 0: `dn`, `pn`.
+// One child's elimination: G = D⁻¹ E (the backward pass's gain, written transposed), and the parent's pivot loses
+// Eᵀ G. D⁻¹ comes transposed (invertDefinite). D, P > 0: fixed sizes (unrolled), 0: `dn`, `pn`.
 template <int D, int P>
-void eliminate(const double* inverse, const double* e, double* g, double* parentPivot, int dn, int pn) {
+void eliminate(const double* inverseT, const double* e, double* gT, double* parentPivot, int dn, int pn) {
     const int d = D > 0 ? D : dn, dp = P > 0 ? P : pn;
     for (int r = 0; r < d; ++r)
         for (int c = 0; c < dp; ++c) {
             double v = 0;
-            for (int q = 0; q < d; ++q) v += inverse[r * d + q] * e[q * dp + c];
-            g[r * dp + c] = v;
+            for (int q = 0; q < d; ++q) v += inverseT[q * d + r] * e[q * dp + c];
+            gT[c * d + r] = v;
         }
     for (int r = 0; r < dp; ++r)
         for (int c = 0; c < dp; ++c) {
             double v = 0;
-            for (int q = 0; q < d; ++q) v += e[q * dp + r] * g[q * dp + c];
+            for (int q = 0; q < d; ++q) v += e[q * dp + r] * gT[c * d + q];
             parentPivot[r * dp + c] -= v;
         }
-}
-
-// A row-major rows × cols block, transposed in place (cols × rows, row-major).
-void transpose(double* a, int rows, int cols) {
-    double t[kMaxDim * kMaxDim];
-    for (int r = 0; r < rows; ++r)
-        for (int c = 0; c < cols; ++c) t[c * rows + r] = a[r * cols + c];
-    std::copy(t, t + rows * cols, a);
 }
 
 using Invert = bool (*)(const double*, int, double*);
@@ -263,9 +256,7 @@ bool BlockTree::factor() {
                 kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot,
                                                                                               d, dp);
             else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
-            transpose(g, d, dp);
         }
-        transpose(pivot, d, d); // solve()'s layout; the node's pivot is not read again here
     }
     return true;
 }
