@@ -31,16 +31,23 @@ afb::figure::Figure armFigure(const std::string& constraint) {
     return *built.figure;
 }
 
-// One 16 × 16 × 8-unit box (0.406 × 0.406 × 0.203 m, density 0.02) with its lowest face at the entity's origin.
-afb::figure::Figure boxFigure() {
+// A figure of one body of density 0.02 on the skeleton's origin joint: its `.af` model and origin as text.
+afb::figure::Figure oneBodyFigure(const std::string& model, const std::string& origin) {
     const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure box {\n body \"box\" { joint \"origin\" model "
-                                                  "box( ( -8, -8, -4 ), ( 8, 8, 4 ) ) origin ( 0, "
-                                                  "0, 4 ) density 0.02 }\n}\n",
+    const auto built = afb::test::buildTestFigure("articulatedFigure one {\n body \"one\" { joint \"origin\" model " +
+                                                      model + " origin " + origin + " density 0.02 }\n}\n",
                                                   joints);
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     return *built.figure;
+}
+
+// One 16 × 16 × 8-unit box (0.406 × 0.406 × 0.203 m) with its lowest face at the entity's origin.
+afb::figure::Figure boxFigure() { return oneBodyFigure("box( ( -8, -8, -4 ), ( 8, 8, 4 ) )", "( 0, 0, 4 )"); }
+
+// A 16-unit octahedron (vertices ±8 units on each axis) with its lowest vertex at the entity's origin.
+afb::figure::Figure octahedronFigure() {
+    return oneBodyFigure("octahedron( ( -8, -8, -8 ), ( 8, 8, 8 ) )", "( 0, 0, 8 )");
 }
 
 // A scene without ground holding one ragdoll of `figure`, rest rules off.
@@ -278,14 +285,7 @@ TEST_CASE("position pass: a corner turned into the ground out of the manifold's 
     // (what is deeper than the 2 mm slop, half of it per sweep) applied to that vertex moves the body straight up
     // (the vertex is below the centre of mass): after one sweep 2 + 28/2 mm deep, after four 2 + 28/16 mm. A vertex
     // the manifold does hold is projected once per sweep, not a second time for being the deepest.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure oct {\n body \"oct\" { joint \"origin\" model "
-                                                  "octahedron( ( -8, -8, -8 ), ( 8, 8, 8 ) ) origin ( 0, 0, 8 ) "
-                                                  "density 0.02 }\n}\n",
-                                                  joints);
-    INFO(built.diagnostics.str());
-    REQUIRE(built.figure);
-    const auto asset = RagdollAsset::create(*built.figure);
+    const auto asset = RagdollAsset::create(octahedronFigure());
     const auto* hull = dynamic_cast<const btConvexHullShape*>(asset->shape(0));
     REQUIRE(hull != nullptr);
     afb::sim::Scene scene(methodWith("multipoint-contacts", "on"), {.gravityMps2 = 0});
@@ -662,14 +662,7 @@ TEST_CASE("vertex contacts: a hull holds each corner once, so an octahedron on a
     // ground could be four copies of one corner (a bone lying on the ground was held at one point and rocked its far
     // end 2.4 cm into the ground). Turned 45° about X, the octahedron's lowest edge joins two vertices, both on the
     // ground, and the next vertices are h·cos 45° up, beyond a 2 cm reach: the manifold holds exactly those two.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0}};
-    const auto built = afb::test::buildTestFigure("articulatedFigure oct {\n body \"oct\" { joint \"origin\" model "
-                                                  "octahedron( ( -8, -8, -8 ), ( 8, 8, 8 ) ) origin ( 0, 0, 8 ) "
-                                                  "density 0.02 }\n}\n",
-                                                  joints);
-    INFO(built.diagnostics.str());
-    REQUIRE(built.figure);
-    const auto asset = RagdollAsset::create(*built.figure);
+    const auto asset = RagdollAsset::create(octahedronFigure());
     const auto* hull = dynamic_cast<const btConvexHullShape*>(asset->shape(0));
     REQUIRE(hull != nullptr);
     CHECK(hull->getNumPoints() == 6);
