@@ -247,16 +247,15 @@ bool BlockTree::factor() {
                                              : invertDefinite<0>(pivot, d, pivot);
         if (!inverted) return false;
         const int p = m_parent[k];
-        if (p >= 0) {
-            const int dp = m_dim[static_cast<std::size_t>(p)];
-            const double* e = m_blocks.data() + m_edgeAt[k];
-            double* g = m_gain.data() + m_gainAt[k];
-            double* parentPivot = m_blocks.data() + m_diagAt[static_cast<std::size_t>(p)];
-            if (d <= kUnrolled && dp <= kUnrolled)
-                kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot,
-                                                                                              d, dp);
-            else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
-        }
+        if (p < 0) continue;
+        const int dp = m_dim[static_cast<std::size_t>(p)];
+        const double* e = m_blocks.data() + m_edgeAt[k];
+        double* g = m_gain.data() + m_gainAt[k];
+        double* parentPivot = m_blocks.data() + m_diagAt[static_cast<std::size_t>(p)];
+        if (d <= kUnrolled && dp <= kUnrolled)
+            kEliminate[static_cast<std::size_t>(d - 1)][static_cast<std::size_t>(dp - 1)](pivot, e, g, parentPivot, d,
+                                                                                          dp);
+        else eliminate<0, 0>(pivot, e, g, parentPivot, d, dp);
     }
     return true;
 }

@@ -115,7 +115,10 @@ struct WorldParts {
 WorldParts makeWorld(const Method& method, btDispatcher& dispatcher, btBroadphaseInterface& broadphase,
                      btCollisionConfiguration& configuration);
 
-/// Sets a world's solver to a method's world-level knobs (what RagdollWorld does at construction).
+/// Sets a world's solver to a method's world-level knobs (what RagdollWorld does at construction). With
+/// Method::directJoints it also makes the world solve one island at a time (btContactSolverInfo's
+/// m_minimumSolverBatchSize = 1), so that no island's result depends on which others were batched with it; a later
+/// call with another method leaves that setting as it is.
 void applyWorldKnobs(btDynamicsWorld& world, const Method& method);
 
 } // namespace afb::bullet
