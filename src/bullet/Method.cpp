@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
                                                           "exact", "legacy",  "multibody"};
 
-const std::array<MethodKnob, 24> kKnobs = {{
+const std::array<MethodKnob, 25> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -57,6 +57,8 @@ const std::array<MethodKnob, 24> kKnobs = {{
      "(on/off; needs a RagdollSolver)",
      &Method::directJoints},
     {"merge-fixed", "Bodies joined by fixed constraints simulated as one rigid body (on/off)", &Method::mergeFixed},
+    {"exempt-overlapping", "Self-collision pairs that overlap at the load pose do not collide (on/off)",
+     &Method::exemptOverlapping},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
@@ -117,6 +119,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.positionVelocity = false;
         m.selfContactCap = 0;
         m.mergeFixed = false;
+        m.exemptOverlapping = false;
         return m;
     }
     if (name == "fast") {

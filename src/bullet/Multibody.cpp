@@ -577,6 +577,11 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
       m_spawn(options.entityTransform) {
     const figure::Figure& f = m_asset->figure();
     m_colliding = figure::selfCollisionPairs(f);
+    if (options.method.exemptOverlapping)
+        std::erase_if(m_colliding, [&](const std::pair<int, int>& pair) {
+            const auto& overlapping = m_asset->overlappingPairs();
+            return std::binary_search(overlapping.begin(), overlapping.end(), pair);
+        });
     m_angularVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
     m_linearVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
     // Damping: the rigid backend scales each body's velocities by (1 − d)^dt per step (btRigidBody's model). In

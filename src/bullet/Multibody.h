@@ -140,7 +140,8 @@ class MultibodyRagdoll {
     std::vector<std::unique_ptr<btMultiBodyLinkCollider>> m_colliders; ///< per figure body
     std::vector<std::unique_ptr<btMultiBodyConstraint>> m_constraints; ///< limits, loops, world joints, springs
     std::vector<std::pair<btTransform, btTransform>> m_frames;         ///< per figure constraint (Ragdoll's meaning)
-    std::vector<std::pair<int, int>> m_colliding;                      ///< figure::selfCollisionPairs
+    std::vector<std::pair<int, int>>
+        m_colliding; ///< figure::selfCollisionPairs (Method::exemptOverlapping: less the overlapping)
     std::vector<btVector3> m_angularVelocity; ///< per figure body, at the end of the last substep (limit margins)
     btScalar m_linearDamping = 0, m_angularDamping = 0;
     std::vector<bool> m_treeEdge;                 ///< per figure constraint: a tree joint (a link), not a loop

@@ -694,9 +694,11 @@ void Ragdoll::addConstraints() {
 }
 
 // §6.2: pairs the figure's rules keep apart, beyond those a joint already disables, and the pairs its joints keep
-// apart anyway (RagdollAsset::prunedPairs).
+// apart anyway (RagdollAsset::prunedPairs), and under Method::exemptOverlapping the pairs that overlap at the load
+// pose.
 void Ragdoll::filterPairs() {
-    const std::vector<std::pair<int, int>>& colliding = m_layout->contactPairs;
+    const std::vector<std::pair<int, int>>& colliding =
+        m_method.exemptOverlapping ? m_layout->contactPairsApart : m_layout->contactPairs;
     const int n = rigidBodyCount();
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {

@@ -123,15 +123,19 @@ void RagdollAsset::fillLayout(RigidLayout& layout, const std::vector<std::vector
         r.boundingRadius = radius;
         compounds.push_back(std::move(compound));
     }
-    for (const auto& [i, j] : m_contactPairs) {
-        int a = layout.rigidOf[static_cast<std::size_t>(i)], b = layout.rigidOf[static_cast<std::size_t>(j)];
+    for (const auto& pair : m_contactPairs) {
+        int a = layout.rigidOf[static_cast<std::size_t>(pair.first)];
+        int b = layout.rigidOf[static_cast<std::size_t>(pair.second)];
         if (a == b) continue;
         if (a > b) std::swap(a, b);
         layout.contactPairs.emplace_back(a, b);
+        if (!std::binary_search(m_overlappingPairs.begin(), m_overlappingPairs.end(), pair))
+            layout.contactPairsApart.emplace_back(a, b);
     }
-    std::sort(layout.contactPairs.begin(), layout.contactPairs.end());
-    layout.contactPairs.erase(std::unique(layout.contactPairs.begin(), layout.contactPairs.end()),
-                              layout.contactPairs.end());
+    for (auto* pairs : {&layout.contactPairs, &layout.contactPairsApart}) {
+        std::sort(pairs->begin(), pairs->end());
+        pairs->erase(std::unique(pairs->begin(), pairs->end()), pairs->end());
+    }
     for (const figure::FigureConstraint& c : f.constraints)
         layout.internal.push_back(c.body2 >= 0 && layout.rigidOf[static_cast<std::size_t>(c.body1)] ==
                                                       layout.rigidOf[static_cast<std::size_t>(c.body2)]);
@@ -182,6 +186,10 @@ std::shared_ptr<const RagdollAsset> RagdollAsset::create(figure::Figure figure) 
     for (const auto& pair : figure::selfCollisionPairs(asset->m_figure))
         if (!std::binary_search(asset->m_prunedPairs.begin(), asset->m_prunedPairs.end(), pair))
             asset->m_contactPairs.push_back(pair);
+    for (const auto& [i, j] : asset->m_contactPairs)
+        if (figure::separation(asset->m_figure.bodies[static_cast<std::size_t>(i)],
+                               asset->m_figure.bodies[static_cast<std::size_t>(j)]) < -figure::kTouchToleranceM)
+            asset->m_overlappingPairs.emplace_back(i, j);
     asset->buildLayout(asset->m_separate, false);
     asset->buildLayout(asset->m_merged, true);
     return asset;

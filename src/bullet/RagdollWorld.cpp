@@ -343,10 +343,15 @@ class RagdollWorld::MergedBodies : public detail::CompoundRules {
             return true;
         const int i = (*bodiesA)[static_cast<std::size_t>(child)];
         const auto& pairs = r.asset()->contactPairs();
+        const auto& overlapping = r.asset()->overlappingPairs();
         for (std::size_t k = 0; k < bodiesB->size(); ++k) {
             if (otherChild >= 0 && static_cast<int>(k) != otherChild) continue;
             const int j = (*bodiesB)[k];
-            if (std::binary_search(pairs.begin(), pairs.end(), std::pair(std::min(i, j), std::max(i, j)))) return true;
+            const std::pair pair(std::min(i, j), std::max(i, j));
+            if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
+            if (r.method().exemptOverlapping && std::binary_search(overlapping.begin(), overlapping.end(), pair))
+                continue;
+            return true;
         }
         return false;
     }

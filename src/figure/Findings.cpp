@@ -85,13 +85,20 @@ void Builder::checkFigure() {
                         " (more than 10:1): the solver struggles with such ratios (figure::stabilizeMassProperties, "
                         "opt-in, evens them out)");
     }
-    // Self-colliding pairs that overlap or touch at the load pose fight their joints from the first step.
+    // Self-colliding pairs that overlap or touch at the load pose fight their joints from the first step (deeper than
+    // the tolerance: bullet::RagdollAsset::overlappingPairs, exempt under Method::exemptOverlapping).
     const auto pairs = selfCollisionPairs(m_figure);
     for (const auto& [i, j] : pairs) {
         const FigureBody& a = m_figure.bodies[static_cast<std::size_t>(i)];
         const FigureBody& b = m_figure.bodies[static_cast<std::size_t>(j)];
         const double gap = separation(a, b);
-        if (gap < kTouchToleranceM)
+        if (gap < -kTouchToleranceM)
+            warning(b.location, "self-colliding bodies '" + a.name + "' and '" + b.name +
+                                    "' overlap at the load pose (depth " + fmt(-gap * 1000) +
+                                    " mm): their contact would fight the joints, so afbullet's methods exempt the "
+                                    "pair from collision (method knob exempt-overlapping; the engine and legacy "
+                                    "keep it)");
+        else if (gap < kTouchToleranceM)
             warning(b.location, "self-colliding bodies '" + a.name + "' and '" + b.name + "' " +
                                     (gap < 0 ? "overlap" : "touch") + " at the load pose (" +
                                     (gap < 0 ? "depth " + fmt(-gap * 1000) : "gap " + fmt(gap * 1000)) +

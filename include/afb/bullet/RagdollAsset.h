@@ -43,6 +43,9 @@ struct RigidLayout {
     std::vector<btTransform> bodyInRigidBt;     ///< the same in Bullet's precision
     /// Rigid pairs (i < j, ascending) that test contact: those with a figure pair in RagdollAsset::contactPairs.
     std::vector<std::pair<int, int>> contactPairs;
+    /// The same less the figure pairs in RagdollAsset::overlappingPairs (Method::exemptOverlapping): a rigid pair
+    /// stays when one of its figure pairs is not overlapping.
+    std::vector<std::pair<int, int>> contactPairsApart;
     /// Whether figure constraint `i` joins two bodies of one rigid (then it has no Bullet constraint).
     std::vector<bool> internal;
 };
@@ -73,6 +76,12 @@ class RagdollAsset {
     /// bodies, within the joints' limits widened by 10° each, they stay more than 2 cm apart, so a ragdoll never
     /// tests them for contact. Computed once per figure (issue 12).
     const std::vector<std::pair<int, int>>& prunedPairs() const { return m_prunedPairs; }
+    /// The contactPairs() whose bodies overlap by more than figure::kTouchToleranceM at the load pose (ascending).
+    /// Their contact fights the joints from the first step, and when the limits do not let them separate it never
+    /// ends (the AF guide's warning; `afb inspect` reports each); under Method::exemptOverlapping (every preset
+    /// but legacy) they do not collide, as Jolt's RagdollSettings::DisableParentChildCollisions does for pairs
+    /// overlapping in the pose it is given, and as `afb gen` does for the figures it writes.
+    const std::vector<std::pair<int, int>>& overlappingPairs() const { return m_overlappingPairs; }
     /// The figure's bodies as Bullet rigid bodies: one each, or (`mergeFixed`) with bodies joined by `fixed`
     /// constraints between two bodies merged into one compound.
     const RigidLayout& layout(bool mergeFixed) const { return mergeFixed ? m_merged : m_separate; }
@@ -91,6 +100,7 @@ class RagdollAsset {
     std::vector<double> m_innerRadii;
     std::vector<std::pair<int, int>> m_contactPairs;
     std::vector<std::pair<int, int>> m_prunedPairs;
+    std::vector<std::pair<int, int>> m_overlappingPairs;
     std::vector<std::unique_ptr<btCollisionShape>> m_compounds; ///< of m_merged's rigids of several bodies
     RigidLayout m_separate;
     RigidLayout m_merged;
