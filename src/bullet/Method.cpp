@@ -104,13 +104,27 @@ std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 //    position pass;
 //  - every preset but legacy warm-starts joint rows (RagdollSolver) and takes plane contacts from the polytope's
 //    vertices;
-//  - they differ in substeps (the lever that cuts impact error most per unit of cost) and iterations, and exact
-//    solves the joints directly;
+//  - the default (and exact, the same method) solves the joints directly; fast and accurate are Bullet's iterative
+//    solve with our rows, differing in substeps (the lever that cuts impact error most per unit of cost);
 //  - fast, default and exact merge fixed joints into one body (Method::mergeFixed; README: Economy).
-std::optional<Method> methodPreset(std::string_view name) {
-    Method m; // the default preset
+namespace {
+
+// The iterative solve (the default until session 15): Bullet's sequential impulse over the joint rows, one
+// friction direction, the sweeps alone as the position pass.
+Method iterative(std::string_view name) {
+    Method m;
     m.name = std::string(name);
+    m.directJoints = false;
+    m.positionTree = 0;
+    m.frictionDirections = 1;
+    return m;
+}
+
+} // namespace
+
+std::optional<Method> methodPreset(std::string_view name) {
     if (name == "legacy") {
+        Method m = iterative(name);
         m.iterations = 10;
         m.jointIterations = 20;
         m.positionIterations = 0;
@@ -123,13 +137,14 @@ std::optional<Method> methodPreset(std::string_view name) {
         return m;
     }
     if (name == "fast") {
+        Method m = iterative(name);
         m.iterations = 20;
         m.jointIterations = 0;
         m.positionIterations = 2;
         return m;
     }
-    if (name == "default") return m;
     if (name == "accurate") {
+        Method m = iterative(name);
         m.substeps = 2;
         m.jointIterations = 0; // the world's 20
         m.positionIterations = 2;
@@ -138,20 +153,21 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.mergeFixed = false;
         return m;
     }
-    if (name == "exact") {
+    if (name == "default" || name == "exact") {
         // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
-        // against the whole ragdoll's mass. The former exact, four substeps of ten iterations, reached 11 mm / 9°
-        // at 1 m and 60 mm / 54° at 10 m for 0.94× this cost (README: Methods). The velocity-exact joints still
-        // drift at the position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at
-        // impact without a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree
-        // step also puts limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only),
-        // moving what is above the ground rather than a foot into it (bodies in contact count 100× heavier there).
-        m.directJoints = true;
-        m.positionTree = 2;
-        // Both tangents of every contact held by friction: with Bullet's one sliding direction, a limb resting
-        // on the ground or on the figure was kicked every few steps through the other tangent and never rested
-        // (stress matrix 96 → 124 of 136 runs; README: Methods).
-        m.frictionDirections = 2;
+        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced (session 15)
+        // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
+        // 10 m for 0.94× this cost's predecessor (README: Methods). The velocity-exact joints still drift at the
+        // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without
+        // a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree step also puts
+        // limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only), moving
+        // what is above the ground rather than a foot into it (bodies in contact count 100× heavier there). Both
+        // tangents of every contact are held by friction: with Bullet's one sliding direction, a limb resting on
+        // the ground or on the figure was kicked every few steps through the other tangent and never rested
+        // (stress matrix 96 → 124 of 136 runs). Fewer iterations cost less but rest less often (15: 71.6 k
+        // instructions against 77.7 k, 124 stress runs against 134).
+        Method m;
+        m.name = std::string(name);
         return m;
     }
     if (name == "multibody") {
@@ -159,6 +175,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         // (20 iterations, vertex contacts, speculative, warm-started), limits our own speculative rows, then 4
         // position sweeps over the limits and contacts (README: the multibody backend). Continuous collision is
         // the rigid backend's (Bullet's multibody world has none).
+        Method m = iterative(name);
         m.backend = Backend::Multibody;
         m.jointIterations = 0;
         m.positionIterations = 4;

@@ -34,12 +34,15 @@ bullet::Method rawMethod() {
     m.ccd = bullet::CcdPolicy::Off;
     // afbullet's own techniques: plain Bullet has none of them.
     m.positionIterations = 0;
+    m.positionTree = 0;
+    m.directJoints = false;
     m.speculativeContacts = false;
     m.speculativeLimits = false;
     m.jointWarmStarting = false;
     m.limitWarmStarting = false;
     m.positionVelocity = false;
     m.mergeFixed = false;
+    m.exemptOverlapping = false;
     return m;
 }
 
@@ -57,6 +60,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.jointWarmStarting) knobs += " joint-warm-starting";
     if (m.limitWarmStarting) knobs += " limit-warm-starting";
     if (m.mergeFixed) knobs += " merge-fixed";
+    if (m.exemptOverlapping) knobs += " exempt-overlapping";
     if (knobs.empty()) return {};
     return "method raw (plain Bullet) has no" + knobs + ": leave them off";
 }

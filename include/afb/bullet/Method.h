@@ -62,9 +62,9 @@ struct Method {
     /// Friction rows per contact point: 1 (Bullet's default: one row along the sliding direction, or along an
     /// arbitrary tangent when the point barely moves, so nothing holds the other tangent) or 2 (both tangents,
     /// SOLVER_USE_2_FRICTION_DIRECTIONS). With one, a resting limb under `directJoints` was kicked to 1–2 rad/s
-    /// every few steps and never came to rest (README: Methods). 2 in exact and multibody (Bullet's multibody
+    /// every few steps and never came to rest (README: Methods). 2 in default, exact and multibody (Bullet's multibody
     /// world sets it itself); the iterative presets lose stress runs with it (their 100 m and 15 Hz drops).
-    int frictionDirections = 1;
+    int frictionDirections = 2;
     /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
     /// velocity solve made them. 0 = off. Runs where a RagdollWorld manages the world. A multibody ragdoll
@@ -76,7 +76,7 @@ struct Method {
     /// 0 = off; 1 = the anchors (to 0.1 mm); 2 = also the locked axes and the limit rows past their limit. The
     /// step does not include contacts: 2 holds limits to tenths of a degree but pushes limbs deeper into the
     /// ground (README: Methods). Joints that close a loop and sliders are left to the sweeps.
-    int positionTree = 0;
+    int positionTree = 2;
     /// Velocities follow the position pass: a body the pass moved back against the motion its velocity made in the
     /// substep loses that part of its velocity (the fraction of v·dt the pass undid along v, and the same for ω).
     /// Without it a velocity the pass reverts every substep lives on: a lying leg kept twisting at 11 rad/s at
@@ -133,7 +133,7 @@ struct Method {
     /// stops the body above it within the iteration instead of one link per iteration. Needs the world's solver to
     /// be a RagdollSolver; set for the world by RagdollWorld from its method (a ragdoll takes part when its own
     /// method has it on).
-    bool directJoints = false;
+    bool directJoints = true;
     /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
     /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
     /// nothing and cannot give. Every figure body keeps its pose (bodyTransforms, the skeleton). Rigid backend only.
