@@ -27,7 +27,9 @@ int main(int argc, char** argv) {
     btDefaultCollisionConfiguration config;
     btCollisionDispatcher dispatcher(&config);
     btDbvtBroadphase broadphase;
-    afb::bullet::RagdollSolver solver; // Bullet's solver, plus warm-started ragdoll joints (any solver works)
+    // Bullet's solver, plus the default's direct joint solve and warm-started joints (any solver works, but with
+    // another one the joints are Bullet's iterative rows)
+    afb::bullet::RagdollSolver solver;
     btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
     world.setGravity(btVector3(0, 0, btScalar(-figure.units.gravityMps2)));
     btStaticPlaneShape groundShape(btVector3(0, 0, 1), 0);
