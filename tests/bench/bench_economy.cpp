@@ -10,7 +10,8 @@
 //   BM_LodSwitch       one humanoid of a world of 100 (default method), 0.5 s into its fall: µs to switch it to
 //                      LOD 6 (Ragdoll::setLod) and back (setFullDetail), timed apart
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
-// solve contacts and joints with 20), default, default:merge-fixed (fixed wrists merged), fast. After the runs, a table
+// solve contacts and joints with 20), default, iterative (the default until session 15: default with
+// direct-joints off, position-tree 0, friction-directions 1), fast. After the runs, a table
 // of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction counts, exact
 // from run to run, come from cmake/callgrind-cost.sh.
 #include <algorithm>
@@ -63,12 +64,14 @@ struct Labelled {
 std::vector<Labelled> methods() {
     Method rawEqual = afb::sim::rawMethod();
     rawEqual.iterations = 20;
-    Method merged = *afb::bullet::methodPreset("default");
-    merged.mergeFixed = true;
+    Method iterative = *afb::bullet::methodPreset("default");
+    iterative.directJoints = false;
+    iterative.positionTree = 0;
+    iterative.frictionDirections = 1;
     return {{"raw", afb::sim::rawMethod()},
             {"raw:iterations=20", rawEqual},
             {"default", *afb::bullet::methodPreset("default")},
-            {"default:merge-fixed", merged},
+            {"iterative", iterative},
             {"fast", *afb::bullet::methodPreset("fast")}};
 }
 
