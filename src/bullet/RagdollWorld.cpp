@@ -373,8 +373,20 @@ class RagdollWorld::MergedBodies : public detail::CompoundRules {
     detail::CompoundCollision m_collision;
 };
 
+Method methodInForce(const Method& method, bool ragdollSolver) {
+    Method m = method;
+    if (!ragdollSolver && m.backend == Backend::Rigid && m.directJoints) {
+        m.directJoints = false;
+        m.positionTree = 0;
+        m.frictionDirections = 1;
+    }
+    return m;
+}
+
 RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)
-    : m_world(world), m_method(method), m_action(std::make_unique<PositionAction>(*this)) {
+    : m_world(world),
+      m_method(methodInForce(method, dynamic_cast<RagdollSolver*>(world.getConstraintSolver()) != nullptr)),
+      m_action(std::make_unique<PositionAction>(*this)) {
     applyWorldKnobs(m_world, m_method);
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver());
         solver && m_method.selfContactCap > 0)

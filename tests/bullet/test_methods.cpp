@@ -12,6 +12,7 @@
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
+#include "afb/bullet/RagdollWorld.h"
 #include "afb/sim/Report.h"
 #include "afb/sim/Scene.h"
 #include "bullet/PositionPass.h"
@@ -115,6 +116,35 @@ TEST_CASE("methods: presets, knobs and their text form", "[bullet][methods]") {
         CHECK(afb::sim::methodFromJson(afb::sim::methodJson(preset), back).empty());
         CHECK(back == preset);
     }
+}
+
+TEST_CASE("methods: without a RagdollSolver the default falls back to the iterative solve", "[bullet][methods]") {
+    const Method def = *afb::bullet::methodPreset("default");
+    REQUIRE(def.directJoints);
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase broadphase;
+    SECTION("Bullet's own solver: the world runs the iterative default's world-level knobs") {
+        btSequentialImpulseConstraintSolver solver;
+        btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
+        const afb::bullet::RagdollWorld ragdollWorld(world, def);
+        CHECK_FALSE(ragdollWorld.method().directJoints);
+        CHECK(ragdollWorld.method().positionTree == 0);
+        CHECK(ragdollWorld.method().frictionDirections == 1);
+        CHECK(ragdollWorld.method().positionIterations == def.positionIterations); // the rest as given
+        CHECK(ragdollWorld.method().mergeFixed == def.mergeFixed);
+        CHECK((world.getSolverInfo().m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) == 0);
+    }
+    SECTION("a RagdollSolver: the method as given") {
+        afb::bullet::RagdollSolver solver;
+        btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
+        const afb::bullet::RagdollWorld ragdollWorld(world, def);
+        CHECK(ragdollWorld.method() == def);
+        CHECK(solver.directJoints());
+    }
+    CHECK(afb::bullet::methodInForce(def, true) == def);
+    const Method fast = *afb::bullet::methodPreset("fast");
+    CHECK(afb::bullet::methodInForce(fast, false) == fast); // nothing to fall back from
 }
 
 TEST_CASE("position pass: a separated joint is closed within one step", "[bullet][methods]") {

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     btCollisionDispatcher dispatcher(&config);
     btDbvtBroadphase broadphase;
     // Bullet's solver, plus the default's direct joint solve and warm-started joints (any solver works, but with
-    // another one the joints are Bullet's iterative rows)
+    // another one RagdollWorld runs the iterative default: RagdollWorld::method() is the method in force)
     afb::bullet::RagdollSolver solver;
     btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
     world.setGravity(btVector3(0, 0, btScalar(-figure.units.gravityMps2)));
