@@ -132,7 +132,8 @@ struct Method {
     /// let it (its effective mass is the ragdoll's at that point, not the touching body's alone), so a landing foot
     /// stops the body above it within the iteration instead of one link per iteration. Needs the world's solver to
     /// be a RagdollSolver; set for the world by RagdollWorld from its method (a ragdoll takes part when its own
-    /// method has it on).
+    /// method has it on; without a RagdollSolver the world falls back to the iterative solve, methodInForce). On in
+    /// default and exact since session 15.
     bool directJoints = true;
     /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
     /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
