@@ -107,16 +107,20 @@ std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 //  - the default (and exact, the same method) solves the joints directly; fast and accurate are Bullet's iterative
 //    solve with our rows, differing in substeps (the lever that cuts impact error most per unit of cost);
 //  - fast, default and exact merge fixed joints into one body (Method::mergeFixed; README: Economy).
+Method iterativeJoints(Method method) {
+    method.directJoints = false;
+    method.positionTree = 0;
+    method.frictionDirections = 1;
+    return method;
+}
+
 namespace {
 
 // The iterative solve (the default until session 15): Bullet's sequential impulse over the joint rows, one
 // friction direction, the sweeps alone as the position pass.
 Method iterative(std::string_view name) {
-    Method m;
+    Method m = iterativeJoints(Method{});
     m.name = std::string(name);
-    m.directJoints = false;
-    m.positionTree = 0;
-    m.frictionDirections = 1;
     return m;
 }
 

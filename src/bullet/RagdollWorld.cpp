@@ -374,13 +374,8 @@ class RagdollWorld::MergedBodies : public detail::CompoundRules {
 };
 
 Method methodInForce(const Method& method, bool ragdollSolver) {
-    Method m = method;
-    if (!ragdollSolver && m.backend == Backend::Rigid && m.directJoints) {
-        m.directJoints = false;
-        m.positionTree = 0;
-        m.frictionDirections = 1;
-    }
-    return m;
+    if (!ragdollSolver && method.backend == Backend::Rigid && method.directJoints) return iterativeJoints(method);
+    return method;
 }
 
 RagdollWorld::RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method)

@@ -65,10 +65,7 @@ struct Labelled {
 std::vector<Labelled> methods() {
     Method rawEqual = afb::sim::rawMethod();
     rawEqual.iterations = 20;
-    Method iterative = *afb::bullet::methodPreset("default");
-    iterative.directJoints = false;
-    iterative.positionTree = 0;
-    iterative.frictionDirections = 1;
+    const Method iterative = afb::bullet::iterativeJoints(*afb::bullet::methodPreset("default"));
     return {{"raw", afb::sim::rawMethod()},
             {"raw:iterations=20", rawEqual},
             {"default", *afb::bullet::methodPreset("default")},

@@ -159,6 +159,11 @@ struct Method {
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);
+/// `method` with Bullet's iterative joint solve in place of the direct one: direct-joints off, position-tree 0,
+/// friction-directions 1. Of the default, the default until session 15 (the spec
+/// `default:direct-joints=off:position-tree=0:friction-directions=1`), and what a world without a RagdollSolver
+/// runs (methodInForce).
+Method iterativeJoints(Method method);
 
 /// One knob of a Method, by the name the CLI, JSON reports and goldens use ("substeps", "joint-iterations", …).
 struct MethodKnob {
