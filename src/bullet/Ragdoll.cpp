@@ -393,6 +393,9 @@ void Ragdoll::sink() {
     m_restProxy->setWorldTransform(btTransform(btQuaternion::getIdentity(), (lo + hi) * btScalar(0.5)));
     m_restProxy->setCollisionFlags(btCollisionObject::CF_STATIC_OBJECT | btCollisionObject::CF_NO_CONTACT_RESPONSE);
     m_restProxy->setUserPointer(this);
+    // Asleep, as Bullet makes a static rigid body: the world then skips its AABB (it never moves) like a sleeping
+    // body's; an active object meeting it still gets a manifold (wakeTouched).
+    m_restProxy->setActivationState(ISLAND_SLEEPING);
     for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
     m_world.addCollisionObject(m_restProxy.get(), btBroadphaseProxy::StaticFilter,
                                mask & ~btBroadphaseProxy::StaticFilter);
