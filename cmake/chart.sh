@@ -9,7 +9,7 @@ cmake --preset release >/dev/null
 cmake --build --preset release --target afb afb-double
 methods=(
   raw raw:substeps=2 raw:substeps=4 raw:iterations=20 # plain Bullet, and its own two levers
-  legacy fast default accurate exact                  # the presets (README "Methods")
+  legacy fast iterative default accurate              # the presets (README "Methods"; exact is default)
   default:substeps=2 fast:position-iterations=0       # a preset with more steps, one without its position pass
   multibody multibody:substeps=2                      # the reduced-coordinate backend (README)
 )

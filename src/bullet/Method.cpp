@@ -9,8 +9,8 @@
 namespace afb::bullet {
 namespace {
 
-constexpr std::array<std::string_view, 6> kPresetNames = {"fast",  "default", "accurate",
-                                                          "exact", "legacy",  "multibody"};
+constexpr std::array<std::string_view, 7> kPresetNames = {"fast",  "iterative", "default",  "accurate",
+                                                          "exact", "legacy",    "multibody"};
 
 const std::array<MethodKnob, 25> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
@@ -139,6 +139,10 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.mergeFixed = false;
         m.exemptOverlapping = false;
         return m;
+    }
+    if (name == "iterative") {
+        // The default until session 15, and what a world without a RagdollSolver runs (methodInForce).
+        return iterative(name);
     }
     if (name == "fast") {
         Method m = iterative(name);

@@ -52,9 +52,7 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
         std::filesystem::path base = ".";
         std::vector<std::string> entities;
         // exact is the default since session 15; the iterative default it replaced stays on the front.
-        std::vector<std::string> methods = {
-            "raw",     "legacy",  "fast", "default:direct-joints=off:position-tree=0:friction-directions=1",
-            "default", "accurate"};
+        std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
         sim::ChartOptions chart;
         std::filesystem::path out = "chart";
         std::string precision;

@@ -65,11 +65,10 @@ struct Labelled {
 std::vector<Labelled> methods() {
     Method rawEqual = afb::sim::rawMethod();
     rawEqual.iterations = 20;
-    const Method iterative = afb::bullet::iterativeJoints(*afb::bullet::methodPreset("default"));
     return {{"raw", afb::sim::rawMethod()},
             {"raw:iterations=20", rawEqual},
             {"default", *afb::bullet::methodPreset("default")},
-            {"iterative", iterative},
+            {"iterative", *afb::bullet::methodPreset("iterative")},
             {"fast", *afb::bullet::methodPreset("fast")}};
 }
 

@@ -153,14 +153,16 @@ struct Method {
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets, fast to exact: "fast", "default", "accurate", "exact", "legacy" (afbullet 0.1's
+/// The named presets: "fast", "iterative" (the default until session 15: the default's knobs with Bullet's
+/// iterative joint solve, iterativeJoints), "default", "accurate", "exact" (the default's name from before
+/// session 15; the same method), "legacy" (afbullet 0.1's
 /// method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for comparison) and
 /// "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);
 /// `method` with Bullet's iterative joint solve in place of the direct one: direct-joints off, position-tree 0,
-/// friction-directions 1. Of the default, the default until session 15 (the spec
+/// friction-directions 1. Of the default, the preset "iterative" (the default until session 15; the spec
 /// `default:direct-joints=off:position-tree=0:friction-directions=1`), and what a world without a RagdollSolver
 /// runs (methodInForce).
 Method iterativeJoints(Method method);
