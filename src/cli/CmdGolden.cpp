@@ -190,6 +190,17 @@ void addGoldenCommand(CLI::App& app, int& exitCode) {
                     exitCode = 1;
                     continue;
                 }
+                // A knob the record does not name would run with today's preset value: a method nobody recorded,
+                // whose pose the record says nothing about.
+                if (const auto missing = sim::missingKnobs(g["options"].value("method", nlohmann::json::object()));
+                    !missing.empty() && g["options"].contains("method")) {
+                    std::string names;
+                    for (const std::string& k : missing) names += (names.empty() ? "" : ", ") + k;
+                    std::cerr << file.string() << ": error: the recorded method does not name " << names
+                              << " (recorded before the knob existed); re-record it with afb golden record\n";
+                    exitCode = 1;
+                    continue;
+                }
                 const Run run = runScenario(base, entity, options, diags);
                 printDiagnostics(diags);
                 if (!run.result) {

@@ -122,6 +122,14 @@ std::string methodFromJson(const json& j, bullet::Method& out) {
     return {};
 }
 
+std::vector<std::string> missingKnobs(const json& method) {
+    std::vector<std::string> out;
+    if (!method.is_object()) return out;
+    for (const bullet::MethodKnob& k : bullet::methodKnobs())
+        if (!method.contains(k.name)) out.emplace_back(k.name);
+    return out;
+}
+
 json dropOptionsJson(const DropOptions& o) {
     json j = {{"height_m", o.heightM},         {"count", o.count},
               {"seconds", o.seconds},          {"hz", o.hz},

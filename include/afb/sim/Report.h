@@ -17,6 +17,9 @@ nlohmann::json methodJson(const bullet::Method& method);
 /// Reads a method written by methodJson: starts from the named preset (or the default) and applies every knob
 /// present. Returns an error message, or an empty string.
 std::string methodFromJson(const nlohmann::json& j, bullet::Method& method);
+/// The knobs (bullet::methodKnobs) that a method written as JSON does not name: methodFromJson gives them the
+/// preset's value of today, which a record made before they existed never ran. Empty for a non-object.
+std::vector<std::string> missingKnobs(const nlohmann::json& method);
 
 /// A drop scenario as JSON (height, count, seed, seconds, hz, sleeping and the method).
 nlohmann::json dropOptionsJson(const DropOptions& options);
