@@ -178,6 +178,57 @@ void JointFrictionConstraint::getInfo2(btConstraintInfo2* info) {
     for (int i = 0; i < m_count; ++i) setAngularRow(info, i, axes.getColumn(i), 0, -m_maxImpulse, m_maxImpulse);
 }
 
+// --- UniversalConstraint --------------------------------------------------------------------------------------
+
+UniversalConstraint::UniversalConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA,
+                                         const btTransform& frameInB)
+    : btTypedConstraint(MAX_CONSTRAINT_TYPE, a, b), m_frameInA(frameInA), m_frameInB(frameInB) {}
+
+void UniversalConstraint::getInfo1(btConstraintInfo1* info) {
+    info->m_numConstraintRows = 4;
+    info->nub = 2;
+}
+
+btScalar UniversalConstraint::twist() const {
+    // Both frames turned halfway through the swing, so that both shafts lie on the bisector: what is left between
+    // them is a turn about the bisector, the one the velocity row holds.
+    const btMatrix3x3 a = m_rbA.getCenterOfMassTransform().getBasis() * m_frameInA.getBasis();
+    const btMatrix3x3 b = m_rbB.getCenterOfMassTransform().getBasis() * m_frameInB.getBasis();
+    const btVector3 xa = a.getColumn(0), xb = b.getColumn(0);
+    btVector3 n = xa + xb;
+    if (n.length2() < btScalar(1e-6)) return 0; // shafts opposed: no bisector
+    n.normalize();
+    const btVector3 ya = quatRotate(shortestArcQuat(xa, n), a.getColumn(1));
+    const btVector3 yb = quatRotate(shortestArcQuat(xb, n), b.getColumn(1));
+    return btAtan2(n.dot(yb.cross(ya)), yb.dot(ya));
+}
+
+void UniversalConstraint::getInfo2(btConstraintInfo2* info) {
+    const btTransform& ta = m_rbA.getCenterOfMassTransform();
+    const btTransform& tb = m_rbB.getCenterOfMassTransform();
+    const btVector3 ra = ta.getBasis() * m_frameInA.getOrigin(), rb = tb.getBasis() * m_frameInB.getOrigin();
+    const btScalar k = info->fps * info->erp;
+    const btVector3 gap = (tb.getOrigin() + rb) - (ta.getOrigin() + ra);
+    for (int i = 0; i < 3; ++i) {
+        const int s = i * info->rowskip;
+        btVector3 e(0, 0, 0);
+        e[i] = 1;
+        const btVector3 angA = ra.cross(e), angB = -rb.cross(e);
+        for (int q = 0; q < 3; ++q) {
+            info->m_J1linearAxis[s + q] = e[q];
+            info->m_J1angularAxis[s + q] = angA[q];
+            if (info->m_J2linearAxis) info->m_J2linearAxis[s + q] = -e[q];
+            info->m_J2angularAxis[s + q] = angB[q];
+        }
+        info->m_constraintError[s] = k * gap[i];
+    }
+    const btVector3 xa = ta.getBasis() * m_frameInA.getBasis().getColumn(0);
+    const btVector3 xb = tb.getBasis() * m_frameInB.getBasis().getColumn(0);
+    btVector3 n = xa + xb;
+    n = n.length2() > btScalar(1e-6) ? n.normalized() : xb;
+    setAngularRow(info, 3, n, -k * twist(), -SIMD_INFINITY, SIMD_INFINITY);
+}
+
 // --- SpringConstraint -----------------------------------------------------------------------------------------
 
 SpringConstraint::Params SpringConstraint::Params::of(const figure::SpringParams& spring) {

@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 7> kPresetNames = {"fast",  "iterative", "default",  "accurate",
                                                           "exact", "legacy",    "multibody"};
 
-const std::array<MethodKnob, 25> kKnobs = {{
+const std::array<MethodKnob, 26> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
@@ -59,6 +59,9 @@ const std::array<MethodKnob, 25> kKnobs = {{
     {"merge-fixed", "Bodies joined by fixed constraints simulated as one rigid body (on/off)", &Method::mergeFixed},
     {"exempt-overlapping", "Self-collision pairs that overlap at the load pose do not collide (on/off)",
      &Method::exemptOverlapping},
+    {"constant-velocity-universal",
+     "Universal joints as a constant-velocity constraint whose twist row always exists, not btConeTwist (on/off)",
+     &Method::constantVelocityUniversal},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
@@ -138,6 +141,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.selfContactCap = 0;
         m.mergeFixed = false;
         m.exemptOverlapping = false;
+        m.constantVelocityUniversal = false;
         return m;
     }
     if (name == "iterative") {

@@ -616,11 +616,15 @@ void Ragdoll::addConstraints() {
             }
             break;
         case JointType::Universal: {
-            // No relative spin about the shafts (homokinetic, §4.4): cone-twist with twist locked, swing free;
-            // frames' X axes are shaft 1 (body1) and −shaft 2 (body2), aligned at the load pose.
-            auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
-            ct->setLimit(SIMD_PI, SIMD_PI, 0);
-            main = std::move(ct);
+            // No relative spin about the shafts (homokinetic, §4.4), swing free: our constant-velocity constraint
+            // (Method::constantVelocityUniversal), or cone-twist with twist locked; frames' X axes are shaft 1
+            // (body1) and −shaft 2 (body2), aligned at the load pose.
+            if (m_method.constantVelocityUniversal) main = std::make_unique<UniversalConstraint>(a, b, fa, fb);
+            else {
+                auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
+                ct->setLimit(SIMD_PI, SIMD_PI, 0);
+                main = std::move(ct);
+            }
             frictionRows = 2;
             frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2],
                                   0, fb.getBasis()[2][1], fb.getBasis()[2][2], 0);

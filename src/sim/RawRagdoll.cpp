@@ -43,6 +43,7 @@ bullet::Method rawMethod() {
     m.positionVelocity = false;
     m.mergeFixed = false;
     m.exemptOverlapping = false;
+    m.constantVelocityUniversal = false;
     return m;
 }
 
@@ -61,6 +62,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.limitWarmStarting) knobs += " limit-warm-starting";
     if (m.mergeFixed) knobs += " merge-fixed";
     if (m.exemptOverlapping) knobs += " exempt-overlapping";
+    if (m.constantVelocityUniversal) knobs += " constant-velocity-universal";
     if (knobs.empty()) return {};
     return "method raw (plain Bullet) has no" + knobs + ": leave them off";
 }

@@ -246,6 +246,64 @@ TEST_CASE("universalJoint: cone limit on shaft 1, no relative spin, spin is tran
     }
 }
 
+TEST_CASE("universalJoint: a constant-velocity constraint whose twist row always exists (cone-twist in legacy)",
+          "[bullet][constraints]") {
+    SECTION("the twist: zero after any swing, the turn about the shafts without one; always four rows") {
+        btBoxShape box(btVector3(0.1f, 0.1f, 0.1f));
+        btRigidBody a(1, nullptr, &box), b(1, nullptr, &box);
+        afb::bullet::UniversalConstraint c(a, b, btTransform::getIdentity(), btTransform::getIdentity());
+        for (const btVector3& axis : {btVector3(0, 1, 0), btVector3(0, 0, 1), btVector3(0, 1, 1).normalized()})
+            for (const double deg : {0.0, 30.0, 60.0, 100.0}) {
+                a.setCenterOfMassTransform(btTransform(btQuaternion(axis, btScalar(deg * kDeg))));
+                CHECK(std::abs(double(c.twist())) < 1e-5);
+            }
+        a.setCenterOfMassTransform(btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(10 * kDeg))));
+        CHECK(double(c.twist()) == Approx(10 * kDeg).margin(1e-5));
+        // Both bodies turned alike: no twist.
+        const btQuaternion common(btVector3(1, 2, 3).normalized(), 1.1f);
+        a.setCenterOfMassTransform(btTransform(common * btQuaternion(btVector3(0, 0, 1), btScalar(50 * kDeg))));
+        b.setCenterOfMassTransform(btTransform(common));
+        CHECK(std::abs(double(c.twist())) < 1e-5);
+        // Aligned frames (where btConeTwistConstraint with a zero twist span has no twist row): four rows.
+        a.setCenterOfMassTransform(btTransform::getIdentity());
+        b.setCenterOfMassTransform(btTransform::getIdentity());
+        btTypedConstraint::btConstraintInfo1 info;
+        c.getInfo1(&info);
+        CHECK(info.m_numConstraintRows == 4);
+    }
+    SECTION("bent 30° under gravity, a torque about the arm's shaft does not twist it") {
+        Scene scene(build(figureWith("universalJoint \"u\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
+                                     "shafts ( 1, 0, 0 ), ( -1, 0, 0 ) friction 0 coneLimit ( 1, 0, 0 ), 60 }")),
+                    btVector3(0, 0, -9.81f));
+        // Both bodies start unrotated, so the frames (X: the shafts) are the bodies' own axes.
+        const afb::bullet::UniversalConstraint probe(scene.ragdoll->body(1), scene.ragdoll->body(0),
+                                                     btTransform::getIdentity(), btTransform::getIdentity());
+        double worst = 0;
+        scene.run(2.0, [&] {
+            const btVector3 shaft = scene.rotation(1).getColumn(0);
+            scene.ragdoll->body(1).applyTorque(shaft * btScalar(0.5));
+            worst = std::max(worst, std::abs(double(probe.twist())));
+        });
+        const double bent = angleBetween(scene.rotation(1).getColumn(0), scene.rotation(0).getColumn(0)) / kDeg;
+        CHECK(bent == Approx(30).margin(1.0)); // hanging on its cone limit
+        CHECK(worst < 0.5 * kDeg);
+    }
+    SECTION("legacy keeps Bullet's btConeTwistConstraint") {
+        const afb::figure::Figure figure = build(figureWith("universalJoint \"u\" { body1 \"arm\" body2 \"top\" "
+                                                            "anchor ( 0, 0, 100 ) shafts ( 1, 0, 0 ), ( -1, 0, 0 ) }"));
+        auto coneTwists = [&](const afb::bullet::Method& method) {
+            afb::sim::Scene scene{method, {.gravityMps2 = 0, .ground = false}};
+            const Ragdoll& r = scene.spawn(RagdollAsset::create(figure), afb::bullet::SpawnOptions{});
+            int n = 0;
+            for (int k = 0; k < r.bulletConstraintCount(); ++k)
+                n += r.bulletConstraint(k).getConstraintType() == CONETWIST_CONSTRAINT_TYPE ? 1 : 0;
+            return n;
+        };
+        CHECK(coneTwists(*afb::bullet::methodPreset("default")) == 0);
+        CHECK(coneTwists(*afb::bullet::methodPreset("legacy")) == 1);
+    }
+}
+
 TEST_CASE("slider: translation along the axis only", "[bullet][constraints]") {
     Scene scene(build(figureWith("slider \"s\" { body1 \"arm\" body2 \"top\" axis ( 1, 0, 0 ) }")),
                 btVector3(2, 0, -9.81f));

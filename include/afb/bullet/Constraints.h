@@ -87,6 +87,24 @@ class HingeRangeConstraint : public btTypedConstraint {
     btScalar m_margin = 0;                      ///< the margin getInfo1 counted rows with (getInfo2 agrees)
 };
 
+/// A universal joint (af-format §4.4) as four rows that always exist: the anchors together (three rows, as
+/// btPoint2PointConstraint) and no relative spin about the bisector of the two shafts (the constant-velocity
+/// condition), with the twist angle of frame A about frame B's X as its position error. Frames' X axes are the
+/// shafts (A's shaft 1, B's −shaft 2: aligned at the load pose).
+class UniversalConstraint : public btTypedConstraint {
+  public:
+    UniversalConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA, const btTransform& frameInB);
+    void getInfo1(btConstraintInfo1* info) override;
+    void getInfo2(btConstraintInfo2* info) override;
+    void setParam(int, btScalar, int) override {}
+    btScalar getParam(int, int) const override { return 0; }
+    /// The twist of frame A about frame B's X, radians (0 at the load pose).
+    btScalar twist() const;
+
+  private:
+    btTransform m_frameInA, m_frameInB;
+};
+
 /// Joint friction (af-format §4.8): rows that resist the relative angular velocity on the free axes, each bounded
 /// by `maxImpulse` per step (set from the joint's own reaction, see Ragdoll). Axes are fixed in body B (world for
 /// a world joint); `count` of the three columns of `axesInB` are used (ball 3, universal 2, hinge 1).

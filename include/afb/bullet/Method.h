@@ -149,6 +149,12 @@ struct Method {
     /// 2.2 m in 30 s and never rested (README: Stability). Jolt does the same for pairs overlapping in a given pose.
     /// Off in legacy (the engine's behaviour). Both backends.
     bool exemptOverlapping = true;
+    /// A universal joint is our constant-velocity constraint (UniversalConstraint: the anchors, and no relative
+    /// spin about the bisector of the two shafts, a row that always exists) instead of btConeTwistConstraint with a
+    /// twist span of 0, whose twist row exists only while the twist is above zero and whose axis turns over with
+    /// its sign: at rest the hips, shoulders and waist toggled it every few steps, and a leg held by joint friction
+    /// kicked at 1.5 rad/s every 13–16 steps (README: Stability). Off in legacy. Rigid backend.
+    bool constantVelocityUniversal = true;
 
     friend bool operator==(const Method&, const Method&) = default;
 };
