@@ -153,7 +153,9 @@ struct Method {
     /// spin about the bisector of the two shafts, a row that always exists) instead of btConeTwistConstraint with a
     /// twist span of 0, whose twist row exists only while the twist is above zero and whose axis turns over with
     /// its sign: at rest the hips, shoulders and waist toggled it every few steps, and a leg held by joint friction
-    /// kicked at 1.5 rad/s every 13–16 steps (README: Stability). Off in legacy. Rigid backend.
+    /// kicked at 1.5 rad/s every 13–16 steps (README: Stability). On in default and accurate; off in fast,
+    /// iterative and legacy (iterativeJoints turns it off: under Bullet's iterative joint solve, `fast` let a zsec
+    /// hip come 138 mm apart in a 100 m drop, 72 mm with the cone-twist). Rigid backend.
     bool constantVelocityUniversal = true;
 
     friend bool operator==(const Method&, const Method&) = default;
@@ -168,9 +170,9 @@ std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);
 /// `method` with Bullet's iterative joint solve in place of the direct one: direct-joints off, position-tree 0,
-/// friction-directions 1. Of the default, the preset "iterative" (the default until session 15; the spec
-/// `default:direct-joints=off:position-tree=0:friction-directions=1`), and what a world without a RagdollSolver
-/// runs (methodInForce).
+/// friction-directions 1, universal joints as btConeTwist (constantVelocityUniversal off). Of the default, the
+/// preset "iterative" (the default until session 15), and what a world without a RagdollSolver runs
+/// (methodInForce).
 Method iterativeJoints(Method method);
 
 /// One knob of a Method, by the name the CLI, JSON reports and goldens use ("substeps", "joint-iterations", …).
