@@ -186,7 +186,7 @@ UniversalConstraint::UniversalConstraint(btRigidBody& a, btRigidBody& b, const b
 
 void UniversalConstraint::getInfo1(btConstraintInfo1* info) {
     info->m_numConstraintRows = 4;
-    info->nub = 2;
+    info->nub = 4; // all unbounded
 }
 
 btScalar UniversalConstraint::twist() const {

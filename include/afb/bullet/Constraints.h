@@ -89,8 +89,8 @@ class HingeRangeConstraint : public btTypedConstraint {
 
 /// A universal joint (af-format §4.4) as four rows that always exist: the anchors together (three rows, as
 /// btPoint2PointConstraint) and no relative spin about the bisector of the two shafts (the constant-velocity
-/// condition), with the twist angle of frame A about frame B's X as its position error. Frames' X axes are the
-/// shafts (A's shaft 1, B's −shaft 2: aligned at the load pose).
+/// condition), with the twist between the two frames, each turned halfway through their swing, as its position
+/// error (twist()). Frames' X axes are the shafts (A's shaft 1, B's −shaft 2: aligned at the load pose).
 class UniversalConstraint : public btTypedConstraint {
   public:
     UniversalConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA, const btTransform& frameInB);
@@ -98,7 +98,8 @@ class UniversalConstraint : public btTypedConstraint {
     void getInfo2(btConstraintInfo2* info) override;
     void setParam(int, btScalar, int) override {}
     btScalar getParam(int, int) const override { return 0; }
-    /// The twist of frame A about frame B's X, radians (0 at the load pose).
+    /// The twist of frame A against frame B about the bisector of their X axes, both turned halfway through the
+    /// swing onto it, radians (0 at the load pose; 0 after any pure swing).
     btScalar twist() const;
 
   private:
