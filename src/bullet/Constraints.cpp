@@ -189,18 +189,30 @@ void UniversalConstraint::getInfo1(btConstraintInfo1* info) {
     info->nub = 4; // all unbounded
 }
 
-btScalar UniversalConstraint::twist() const {
-    // Both frames turned halfway through the swing, so that both shafts lie on the bisector: what is left between
-    // them is a turn about the bisector, the one the velocity row holds.
-    const btMatrix3x3 a = m_rbA.getCenterOfMassTransform().getBasis() * m_frameInA.getBasis();
-    const btMatrix3x3 b = m_rbB.getCenterOfMassTransform().getBasis() * m_frameInB.getBasis();
+namespace {
+
+// The twist of frame `a` against frame `b` (world bases, X the shafts) about the bisector of their X axes, both
+// turned halfway through the swing onto it; `bisector` receives that axis (b's X when the shafts are opposed, where
+// the twist is taken as 0).
+btScalar universalTwist(const btMatrix3x3& a, const btMatrix3x3& b, btVector3& bisector) {
     const btVector3 xa = a.getColumn(0), xb = b.getColumn(0);
-    btVector3 n = xa + xb;
-    if (n.length2() < btScalar(1e-6)) return 0; // shafts opposed: no bisector
-    n.normalize();
-    const btVector3 ya = quatRotate(shortestArcQuat(xa, n), a.getColumn(1));
-    const btVector3 yb = quatRotate(shortestArcQuat(xb, n), b.getColumn(1));
-    return btAtan2(n.dot(yb.cross(ya)), yb.dot(ya));
+    bisector = xa + xb;
+    if (bisector.length2() < btScalar(1e-6)) {
+        bisector = xb;
+        return 0;
+    }
+    bisector.normalize();
+    const btVector3 ya = quatRotate(shortestArcQuat(xa, bisector), a.getColumn(1));
+    const btVector3 yb = quatRotate(shortestArcQuat(xb, bisector), b.getColumn(1));
+    return btAtan2(bisector.dot(yb.cross(ya)), yb.dot(ya));
+}
+
+} // namespace
+
+btScalar UniversalConstraint::twist() const {
+    btVector3 bisector;
+    return universalTwist(m_rbA.getCenterOfMassTransform().getBasis() * m_frameInA.getBasis(),
+                          m_rbB.getCenterOfMassTransform().getBasis() * m_frameInB.getBasis(), bisector);
 }
 
 void UniversalConstraint::getInfo2(btConstraintInfo2* info) {
@@ -222,11 +234,11 @@ void UniversalConstraint::getInfo2(btConstraintInfo2* info) {
         }
         info->m_constraintError[s] = k * gap[i];
     }
-    const btVector3 xa = ta.getBasis() * m_frameInA.getBasis().getColumn(0);
-    const btVector3 xb = tb.getBasis() * m_frameInB.getBasis().getColumn(0);
-    btVector3 n = xa + xb;
-    n = n.length2() > btScalar(1e-6) ? n.normalized() : xb;
-    setAngularRow(info, 3, n, -k * twist(), -SIMD_INFINITY, SIMD_INFINITY);
+    // One pass over the frames gives the row's axis and its error.
+    btVector3 n;
+    const btScalar twist =
+        universalTwist(ta.getBasis() * m_frameInA.getBasis(), tb.getBasis() * m_frameInB.getBasis(), n);
+    setAngularRow(info, 3, n, -k * twist, -SIMD_INFINITY, SIMD_INFINITY);
 }
 
 // --- SpringConstraint -----------------------------------------------------------------------------------------
