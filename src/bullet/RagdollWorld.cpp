@@ -8,6 +8,7 @@
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
 
+#include "BoxBoxCollision.h"
 #include "CompoundCollision.h"
 #include "EngineFriction.h"
 #include "HullPlaneCollision.h"
@@ -130,6 +131,8 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
             else config->setPlaneConvexMultipointIterations(1, 0);
             // Hulls against planes: every vertex within reach (a body on an edge knows its far corners).
             detail::useVertexHullPlaneContacts(*dispatcher, m.multipointContacts, *config);
+            // Boxes against boxes: speculative points while apart (Bullet's detector reports overlap only).
+            detail::useSpeculativeBoxBoxContacts(*dispatcher, m.speculativeContacts, *config);
         }
 }
 
