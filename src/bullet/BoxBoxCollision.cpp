@@ -8,6 +8,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
 #include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+#include <BulletDynamics/Dynamics/btRigidBody.h>
 
 namespace afb::bullet::detail {
 namespace {
@@ -45,6 +46,15 @@ struct ShiftedResult : btDiscreteCollisionDetectorInterface::Result {
     btVector3 m_normal;
     btScalar m_shift;
 };
+
+// The velocity of the point `p` (world) of an object: a rigid body's, or a multibody link collider's as published
+// on it (MultibodyRagdoll::publishVelocities; zero for objects that never set it).
+btVector3 pointVelocity(const btCollisionObject* o, const btVector3& p) {
+    if (const btRigidBody* b = btRigidBody::upcast(o))
+        return b->getVelocityInLocalPoint(p - b->getCenterOfMassPosition());
+    return o->getInterpolationLinearVelocity() +
+           o->getInterpolationAngularVelocity().cross(p - o->getWorldTransform().getOrigin());
+}
 
 class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
   public:
@@ -84,8 +94,17 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
             btGjkPairDetector gjk(box0, box1, &simplex, &epa);
             btPointCollector closest;
             gjk.getClosestPoints(input, closest, info.m_debugDraw);
+            // Only when the boxes can close the gap in this step at their current velocities (with the reach's
+            // allowance for acceleration): a point between boxes lying still near each other would do nothing but
+            // take a place in the manifold (and, measured, kept a humanoid's feet from resting).
+            const btVector3& n = closest.m_normalOnBInWorld;
+            const btVector3& onB = closest.m_pointInWorld;
+            const btScalar closing = (pointVelocity(w1->getCollisionObject(), onB) -
+                                      pointVelocity(w0->getCollisionObject(), onB + n * closest.m_distance))
+                                         .dot(n);
             if (!closest.m_hasResult || closest.m_distance < 0 ||
-                closest.m_distance > m_manifold->getContactBreakingThreshold()) {
+                closest.m_distance > m_manifold->getContactBreakingThreshold() ||
+                closing * info.m_timeStep * kReachAllowance < closest.m_distance) {
                 out->refreshContactPoints();
                 return;
             }
@@ -113,6 +132,8 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
     }
 
   private:
+    // The reach's allowance for the acceleration within the step (RagdollWorld's).
+    static constexpr btScalar kReachAllowance = btScalar(1.25);
     // How far the clipping run pushes the boxes into each other, metres.
     static constexpr btScalar kOverlapM = btScalar(0.001);
 
