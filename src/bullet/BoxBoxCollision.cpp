@@ -94,6 +94,11 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
             btGjkPairDetector gjk(box0, box1, &simplex, &epa);
             btPointCollector closest;
             gjk.getClosestPoints(input, closest, info.m_debugDraw);
+            if (!closest.m_hasResult || closest.m_distance < 0 ||
+                closest.m_distance > m_manifold->getContactBreakingThreshold()) {
+                out->refreshContactPoints();
+                return;
+            }
             // Only when the boxes can close the gap in this step at their current velocities (with the reach's
             // allowance for acceleration): a point between boxes lying still near each other would do nothing but
             // take a place in the manifold (and, measured, kept a humanoid's feet from resting).
@@ -102,9 +107,7 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
             const btScalar closing = (pointVelocity(w1->getCollisionObject(), onB) -
                                       pointVelocity(w0->getCollisionObject(), onB + n * closest.m_distance))
                                          .dot(n);
-            if (!closest.m_hasResult || closest.m_distance < 0 ||
-                closest.m_distance > m_manifold->getContactBreakingThreshold() ||
-                closing * info.m_timeStep * kReachAllowance < closest.m_distance) {
+            if (closing * info.m_timeStep * kReachAllowance < closest.m_distance) {
                 out->refreshContactPoints();
                 return;
             }
@@ -113,12 +116,11 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
             // first box moved onto the second along the normal (by the distance and a little more), and each of
             // its points is reported at its distance now.
             const btScalar shift = closest.m_distance + kOverlapM;
-            ShiftedResult shifted(*out, closest.m_normalOnBInWorld, shift);
-            input.m_transformA.getOrigin() -= closest.m_normalOnBInWorld * shift;
+            ShiftedResult shifted(*out, n, shift);
+            input.m_transformA.getOrigin() -= n * shift;
             input.m_maximumDistanceSquared = BT_LARGE_FLOAT;
             detector.getClosestPoints(input, shifted, info.m_debugDraw);
-            if (shifted.count == 0)
-                out->addContactPoint(closest.m_normalOnBInWorld, closest.m_pointInWorld, closest.m_distance);
+            if (shifted.count == 0) out->addContactPoint(n, onB, closest.m_distance);
         }
         out->refreshContactPoints();
     }
