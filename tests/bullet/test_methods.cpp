@@ -642,6 +642,33 @@ TEST_CASE("speculative contacts: a box falling onto a box stops at its face", "[
     CHECK(speculative < 0.005);
 }
 
+TEST_CASE("speculative contacts: two boxes lying still 1 cm apart get no point between them", "[bullet][methods]") {
+    // The box–box speculative points are made only when the boxes can close their gap within the step: points
+    // between still boxes would take places in the manifold and, measured, kept a humanoid's feet from resting.
+    const afb::figure::Figure boxFig = boxFigure();
+    afb::sim::Scene scene(afb::bullet::Method{});
+    const auto asset = RagdollAsset::create(boxFig);
+    Ragdoll& a = scene.spawn(asset, {.comeToRest = false});
+    btTransform t = btTransform::getIdentity();
+    t.setOrigin(btVector3(btScalar(0.406 + 0.01), 0, 0)); // 1 cm beside the first (the boxes are 0.406 m wide)
+    Ragdoll& b = scene.spawn(asset, {.entityTransform = t, .comeToRest = false});
+    int points = 0;
+    for (int i = 0; i < 60; ++i) {
+        scene.step(1.0 / 60.0);
+        btDispatcher& d = *scene.world().getDispatcher();
+        for (int m = 0; m < d.getNumManifolds(); ++m) {
+            const btPersistentManifold& man = *d.getInternalManifoldPointer()[m];
+            if ((man.getBody0() == &a.collisionObject(0) && man.getBody1() == &b.collisionObject(0)) ||
+                (man.getBody1() == &a.collisionObject(0) && man.getBody0() == &b.collisionObject(0)))
+                points += man.getNumContacts();
+        }
+    }
+    CHECK(points == 0);
+    // Still apart: neither box moved toward the other.
+    CHECK(b.body(0).getCenterOfMassPosition().x() - a.body(0).getCenterOfMassPosition().x() ==
+          Approx(0.416).margin(0.002));
+}
+
 TEST_CASE("friction directions: a box on the ground pulled by a joint below its friction bound stays with two",
           "[bullet][methods]") {
     // Bullet's default friction is one row per contact point, along the point's sliding velocity before the solve,
