@@ -1,7 +1,6 @@
 // Box–box contacts with speculative points (BoxBoxCollision.h).
 #include "BoxBoxCollision.h"
 
-#include <BulletCollision/CollisionDispatch/btActivatingCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btBoxBoxDetector.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
@@ -9,6 +8,8 @@
 #include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <BulletDynamics/Dynamics/btRigidBody.h>
+
+#include "OwnedManifoldAlgorithm.h"
 
 namespace afb::bullet::detail {
 namespace {
@@ -56,19 +57,11 @@ btVector3 pointVelocity(const btCollisionObject* o, const btVector3& p) {
            o->getInterpolationAngularVelocity().cross(p - o->getWorldTransform().getOrigin());
 }
 
-class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
+class SpeculativeBoxBoxAlgorithm : public OwnedManifoldAlgorithm {
   public:
     SpeculativeBoxBoxAlgorithm(const btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* w0,
                                const btCollisionObjectWrapper* w1)
-        : btActivatingCollisionAlgorithm(ci, w0, w1) {
-        if (m_dispatcher->needsCollision(w0->getCollisionObject(), w1->getCollisionObject()))
-            m_manifold = m_dispatcher->getNewManifold(w0->getCollisionObject(), w1->getCollisionObject());
-    }
-    ~SpeculativeBoxBoxAlgorithm() override {
-        if (m_manifold != nullptr) m_dispatcher->releaseManifold(m_manifold);
-    }
-    SpeculativeBoxBoxAlgorithm(const SpeculativeBoxBoxAlgorithm&) = delete;
-    SpeculativeBoxBoxAlgorithm& operator=(const SpeculativeBoxBoxAlgorithm&) = delete;
+        : OwnedManifoldAlgorithm(ci, w0, w1, w0->getCollisionObject(), w1->getCollisionObject()) {}
 
     void processCollision(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1,
                           const btDispatcherInfo& info, btManifoldResult* out) override {
@@ -125,21 +118,11 @@ class SpeculativeBoxBoxAlgorithm : public btActivatingCollisionAlgorithm {
         out->refreshContactPoints();
     }
 
-    btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,
-                                   btManifoldResult*) override {
-        return 1; // not used by btDiscreteDynamicsWorld
-    }
-    void getAllContactManifolds(btManifoldArray& manifolds) override {
-        if (m_manifold != nullptr) manifolds.push_back(m_manifold);
-    }
-
   private:
     // The reach's allowance for the acceleration within the step (RagdollWorld's).
     static constexpr btScalar kReachAllowance = btScalar(1.25);
     // How far the clipping run pushes the boxes into each other, metres.
     static constexpr btScalar kOverlapM = btScalar(0.001);
-
-    btPersistentManifold* m_manifold = nullptr;
 };
 
 struct CreateBoxBox : btCollisionAlgorithmCreateFunc {

@@ -10,9 +10,10 @@
 #include <algorithm>
 #include <vector>
 
-#include <BulletCollision/CollisionDispatch/btActivatingCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletDynamics/Dynamics/btRigidBody.h>
+
+#include "OwnedManifoldAlgorithm.h"
 
 namespace afb::bullet::detail {
 namespace {
@@ -24,20 +25,13 @@ struct Candidate {
     btScalar rank;        ///< the nearer of now and the end of the step
 };
 
-class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
+class PolytopePlaneAlgorithm : public OwnedManifoldAlgorithm {
   public:
     PolytopePlaneAlgorithm(const btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* w0,
                            const btCollisionObjectWrapper* w1, bool swapped)
-        : btActivatingCollisionAlgorithm(ci, w0, w1), m_swapped(swapped) {
-        const btCollisionObject* polytope = swapped ? w1->getCollisionObject() : w0->getCollisionObject();
-        const btCollisionObject* plane = swapped ? w0->getCollisionObject() : w1->getCollisionObject();
-        if (m_dispatcher->needsCollision(polytope, plane)) m_manifold = m_dispatcher->getNewManifold(polytope, plane);
-    }
-    ~PolytopePlaneAlgorithm() override {
-        if (m_manifold != nullptr) m_dispatcher->releaseManifold(m_manifold);
-    }
-    PolytopePlaneAlgorithm(const PolytopePlaneAlgorithm&) = delete;
-    PolytopePlaneAlgorithm& operator=(const PolytopePlaneAlgorithm&) = delete;
+        : OwnedManifoldAlgorithm(ci, w0, w1, (swapped ? w1 : w0)->getCollisionObject(),
+                                 (swapped ? w0 : w1)->getCollisionObject()),
+          m_swapped(swapped) {}
 
     void processCollision(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1,
                           const btDispatcherInfo& info, btManifoldResult* out) override {
@@ -107,14 +101,6 @@ class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
         for (int i = 0; i < count; ++i) add(best[static_cast<std::size_t>(i)], normal, polytopeWrap, planeWrap, w0, w1);
         if (wasEmpty && m_manifold->getNumContacts() > 0 && gContactStartedCallback != nullptr)
             gContactStartedCallback(m_manifold);
-    }
-
-    btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,
-                                   btManifoldResult*) override {
-        return 1;
-    }
-    void getAllContactManifolds(btManifoldArray& manifolds) override {
-        if (m_manifold != nullptr) manifolds.push_back(m_manifold);
     }
 
   private:
@@ -202,7 +188,6 @@ class PolytopePlaneAlgorithm : public btActivatingCollisionAlgorithm {
     // A vertex already in the manifold ranks this much nearer than it is, metres (hysteresis).
     static constexpr btScalar kKeepM = btScalar(0.001);
 
-    btPersistentManifold* m_manifold = nullptr;
     std::vector<Candidate> m_candidates; // reused from step to step
     bool m_swapped;
 };

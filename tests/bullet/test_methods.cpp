@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "FigureFixture.h"
 #include "afb/bullet/Convert.h"
@@ -72,6 +73,19 @@ Method methodWith(const std::string& knob, const std::string& value) {
     REQUIRE(k != nullptr);
     REQUIRE(afb::bullet::setKnob(m, *k, value).empty());
     return m;
+}
+
+// The signed distances of every contact point between `a` and `b` in the scene's manifolds now.
+std::vector<double> contactDistances(afb::sim::Scene& scene, const btCollisionObject* a, const btCollisionObject* b) {
+    std::vector<double> out;
+    btDispatcher& d = *scene.world().getDispatcher();
+    for (int m = 0; m < d.getNumManifolds(); ++m) {
+        const btPersistentManifold& man = *d.getInternalManifoldPointer()[m];
+        if ((man.getBody0() == a && man.getBody1() == b) || (man.getBody0() == b && man.getBody1() == a))
+            for (int c = 0; c < man.getNumContacts(); ++c)
+                out.push_back(static_cast<double>(man.getContactPoint(c).getDistance()));
+    }
+    return out;
 }
 
 } // namespace
@@ -622,15 +636,8 @@ TEST_CASE("speculative contacts: a box falling onto a box stops at its face", "[
         double worst = 0;
         for (int i = 0; i < 60; ++i) {
             scene.step(1.0 / 60.0);
-            btDispatcher& d = *scene.world().getDispatcher();
-            for (int m = 0; m < d.getNumManifolds(); ++m) {
-                const btPersistentManifold& man = *d.getInternalManifoldPointer()[m];
-                const bool pair =
-                    (man.getBody0() == &above.collisionObject(0) && man.getBody1() == &below.collisionObject(0)) ||
-                    (man.getBody1() == &above.collisionObject(0) && man.getBody0() == &below.collisionObject(0));
-                for (int c = 0; pair && c < man.getNumContacts(); ++c)
-                    worst = std::max(worst, -static_cast<double>(man.getContactPoint(c).getDistance()));
-            }
+            for (const double d : contactDistances(scene, &above.collisionObject(0), &below.collisionObject(0)))
+                worst = std::max(worst, -d);
         }
         return worst;
     };
@@ -655,13 +662,7 @@ TEST_CASE("speculative contacts: two boxes lying still 1 cm apart get no point b
     int points = 0;
     for (int i = 0; i < 60; ++i) {
         scene.step(1.0 / 60.0);
-        btDispatcher& d = *scene.world().getDispatcher();
-        for (int m = 0; m < d.getNumManifolds(); ++m) {
-            const btPersistentManifold& man = *d.getInternalManifoldPointer()[m];
-            if ((man.getBody0() == &a.collisionObject(0) && man.getBody1() == &b.collisionObject(0)) ||
-                (man.getBody1() == &a.collisionObject(0) && man.getBody0() == &b.collisionObject(0)))
-                points += man.getNumContacts();
-        }
+        points += static_cast<int>(contactDistances(scene, &a.collisionObject(0), &b.collisionObject(0)).size());
     }
     CHECK(points == 0);
     // Still apart: neither box moved toward the other.
