@@ -424,8 +424,7 @@ void Ragdoll::thawBodies() {
         m_world.addRigidBody(&b, m_group, m_masks[i]);
         b.setSleepingThresholds(0, 0);
     }
-    for (std::size_t k = 0; k < m_constraints.size(); ++k)
-        m_world.addConstraint(m_constraints[k].get(), m_disablesCollision[k]);
+    for (const auto& constraint : m_constraints) m_world.addConstraint(constraint.get());
 }
 
 void Ragdoll::wake() {
@@ -457,7 +456,6 @@ void Ragdoll::removeBulletObjects() {
     m_calmSubsteps = 0;
     m_action->frictions.clear();
     m_constraints.clear();
-    m_disablesCollision.clear();
     m_limitRows.clear();
     m_main.clear();
     m_frames.clear();
@@ -489,6 +487,20 @@ Ragdoll::~Ragdoll() {
     for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
 }
 
+namespace {
+
+// A btRigidBody whose list of bodies it does not collide with (btCollisionObject::setIgnoreCollisionCheck) can be
+// sized before it is filled: filterPairs adds up to a dozen entries per body, each growing the array otherwise.
+class FigureRigidBody : public btRigidBody {
+  public:
+    using btRigidBody::btRigidBody;
+    void reserveIgnored(int count) { m_objectsWithoutCollisionCheck.reserve(count); }
+};
+
+thread_local std::vector<int> t_ignoredCount; // filterPairs' scratch
+
+} // namespace
+
 void Ragdoll::addBodies() {
     const figure::Figure& f = figure();
     m_bodies.reserve(m_layout->rigids.size());
@@ -503,7 +515,7 @@ void Ragdoll::addBodies() {
         info.m_restitution = static_cast<btScalar>(kBodyRestitution);
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
-        auto body = std::make_unique<btRigidBody>(info);
+        auto body = std::make_unique<FigureRigidBody>(info);
         body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
         if (m_method.ccd == CcdPolicy::FastBodies) {
             // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
@@ -557,7 +569,6 @@ void Ragdoll::addConstraints() {
     m_rigidFrames.reserve(f.constraints.size());
     m_main.reserve(f.constraints.size());
     m_constraints.reserve(3 * f.constraints.size());
-    m_disablesCollision.reserve(3 * f.constraints.size());
     m_limitRows.reserve(3 * f.constraints.size());
     const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
     for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
@@ -673,7 +684,10 @@ void Ragdoll::addConstraints() {
             if (limit) limit->setOverrideNumSolverIterations(iterations);
         }
         if (main) {
-            m_world.addConstraint(main.get(), c.disablesCollision);
+            // Collision between the joint's bodies is off through filterPairs (RigidLayout::ignoredPairs has every
+            // pair a joint disables, §6.2), not through Bullet's constraint references, which would add the same
+            // entry to each body's list again, with a linear search per constraint and body, at every spawn.
+            m_world.addConstraint(main.get());
             if (c.friction > 0 && frictionRows > 0) {
                 auto fb2 = std::make_unique<btJointFeedback>();
                 main->setJointFeedback(fb2.get());
@@ -681,40 +695,42 @@ void Ragdoll::addConstraints() {
                 m_action->frictions.push_back({fr.get(), fb2.get(), static_cast<btScalar>(c.friction) * lever});
                 m_feedback.push_back(std::move(fb2));
                 m_constraints.push_back(std::move(main));
-                m_disablesCollision.push_back(c.disablesCollision);
-                m_world.addConstraint(fr.get(), false);
+                m_world.addConstraint(fr.get());
                 m_constraints.push_back(std::move(fr));
-                m_disablesCollision.push_back(false);
             } else {
                 m_constraints.push_back(std::move(main));
-                m_disablesCollision.push_back(c.disablesCollision);
             }
         }
         m_limitRows.resize(m_constraints.size(), false);
         if (limit) {
-            m_world.addConstraint(limit.get(), false);
+            m_world.addConstraint(limit.get());
             m_constraints.push_back(std::move(limit));
-            m_disablesCollision.push_back(false);
             m_limitRows.push_back(true);
         }
     }
 }
 
-// §6.2: pairs the figure's rules keep apart, beyond those a joint already disables, and the pairs its joints keep
-// apart anyway (RagdollAsset::prunedPairs), and under Method::exemptOverlapping the pairs that overlap at the load
-// pose.
+// §6.2: every pair of the ragdoll's bodies that does not test contact (RigidLayout::ignoredPairs, computed once per
+// figure): the pairs the figure's rules keep apart, those a joint disables among them (Bullet's own constraint
+// references are not used for it, see addConstraints), the pairs its joints keep apart anyway
+// (RagdollAsset::prunedPairs), and under Method::exemptOverlapping the pairs that overlap at the load pose.
 void Ragdoll::filterPairs() {
-    const std::vector<std::pair<int, int>>& colliding =
-        m_method.exemptOverlapping ? m_layout->contactPairsApart : m_layout->contactPairs;
-    const int n = rigidBodyCount();
-    for (int i = 0; i < n; ++i)
-        for (int j = i + 1; j < n; ++j) {
-            if (std::binary_search(colliding.begin(), colliding.end(), std::make_pair(i, j))) continue;
-            m_bodies[static_cast<std::size_t>(i)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(j)].get(),
-                                                                           true);
-            m_bodies[static_cast<std::size_t>(j)]->setIgnoreCollisionCheck(m_bodies[static_cast<std::size_t>(i)].get(),
-                                                                           true);
-        }
+    const std::vector<std::pair<int, int>>& ignored =
+        m_method.exemptOverlapping ? m_layout->ignoredPairsApart : m_layout->ignoredPairs;
+    std::vector<int>& count = t_ignoredCount;
+    count.assign(m_bodies.size(), 0);
+    for (const auto& [i, j] : ignored) {
+        ++count[static_cast<std::size_t>(i)];
+        ++count[static_cast<std::size_t>(j)];
+    }
+    for (std::size_t i = 0; i < m_bodies.size(); ++i)
+        static_cast<FigureRigidBody&>(*m_bodies[i]).reserveIgnored(count[i]);
+    for (const auto& [i, j] : ignored) {
+        btRigidBody& a = *m_bodies[static_cast<std::size_t>(i)];
+        btRigidBody& b = *m_bodies[static_cast<std::size_t>(j)];
+        a.setIgnoreCollisionCheck(&b, true);
+        b.setIgnoreCollisionCheck(&a, true);
+    }
 }
 
 } // namespace afb::bullet

@@ -136,6 +136,29 @@ void RagdollAsset::fillLayout(RigidLayout& layout, const std::vector<std::vector
         std::sort(pairs->begin(), pairs->end());
         pairs->erase(std::unique(pairs->begin(), pairs->end()), pairs->end());
     }
+    // What each ragdoll hands Bullet as it spawns (Ragdoll::filterPairs): their complements, and every pair of rigids
+    // that a joint between two of their bodies disables (what Bullet's constraint references would add: a merged
+    // rigid keeps its joints' pairs off even when another of its bodies may touch the other rigid).
+    const int rigids = static_cast<int>(layout.rigids.size());
+    std::vector<std::pair<int, int>> jointed;
+    for (const figure::FigureConstraint& c : f.constraints) {
+        if (!c.disablesCollision || c.body2 < 0) continue;
+        const int a = layout.rigidOf[static_cast<std::size_t>(c.body1)];
+        const int b = layout.rigidOf[static_cast<std::size_t>(c.body2)];
+        if (a != b) jointed.emplace_back(std::min(a, b), std::max(a, b));
+    }
+    std::sort(jointed.begin(), jointed.end());
+    for (const auto& [pairs, ignored] : {std::pair{&layout.contactPairs, &layout.ignoredPairs},
+                                         std::pair{&layout.contactPairsApart, &layout.ignoredPairsApart}}) {
+        ignored->clear();
+        for (int i = 0; i < rigids; ++i)
+            for (int j = i + 1; j < rigids; ++j) {
+                const std::pair pair(i, j);
+                if (!std::binary_search(pairs->begin(), pairs->end(), pair) ||
+                    std::binary_search(jointed.begin(), jointed.end(), pair))
+                    ignored->emplace_back(pair);
+            }
+    }
     for (const figure::FigureConstraint& c : f.constraints)
         layout.internal.push_back(c.body2 >= 0 && layout.rigidOf[static_cast<std::size_t>(c.body1)] ==
                                                       layout.rigidOf[static_cast<std::size_t>(c.body2)]);

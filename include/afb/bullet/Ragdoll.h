@@ -300,12 +300,11 @@ class Ragdoll {
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;            ///< one per rigid of m_layout
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
-    std::vector<bool> m_disablesCollision; ///< per Bullet constraint: added with collision between its bodies off
-    std::vector<bool> m_limitRows;         ///< per Bullet constraint: one of our limit constraints
-    int m_group = 0;                       ///< collision group of every body
-    int m_spawnMask = 0;                   ///< SpawnOptions::collisionMask
-    std::vector<int> m_masks;              ///< collision mask of each rigid body
-    bool m_frozen = false;                 ///< see frozen()
+    std::vector<bool> m_limitRows; ///< per Bullet constraint: one of our limit constraints
+    int m_group = 0;               ///< collision group of every body
+    int m_spawnMask = 0;           ///< SpawnOptions::collisionMask
+    std::vector<int> m_masks;      ///< collision mask of each rigid body
+    bool m_frozen = false;         ///< see frozen()
     FrozenContact m_frozenContact;
     std::unique_ptr<btBoxShape> m_restProxyShape;   ///< see sunk()
     std::unique_ptr<btCollisionObject> m_restProxy; ///< see sunk()

@@ -46,6 +46,10 @@ struct RigidLayout {
     /// The same less the figure pairs in RagdollAsset::overlappingPairs (Method::exemptOverlapping): a rigid pair
     /// stays when one of its figure pairs is not overlapping.
     std::vector<std::pair<int, int>> contactPairsApart;
+    /// The rigid pairs (i < j, ascending) that never collide: those not in contactPairs (not in contactPairsApart),
+    /// and those joined by a constraint that disables collision between its bodies (as Bullet's constraint
+    /// references would have them).
+    std::vector<std::pair<int, int>> ignoredPairs, ignoredPairsApart;
     /// Whether figure constraint `i` joins two bodies of one rigid (then it has no Bullet constraint).
     std::vector<bool> internal;
 };
