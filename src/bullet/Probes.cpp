@@ -38,7 +38,7 @@ JointError jointError(const figure::FigureConstraint& c, const At& at,
 
 } // namespace
 
-std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c, const BodyList& bodies,
+std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c, BodyList bodies,
                                                             const std::pair<btTransform, btTransform>& frames) {
     return framesWorld(
         c, [&](int i) -> const btTransform& { return bodies[static_cast<std::size_t>(i)]->getCenterOfMassTransform(); },
@@ -52,7 +52,7 @@ std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::Figure
         c, [&](int i) -> const btTransform& { return bodies[static_cast<std::size_t>(i)]; }, frames);
 }
 
-JointError jointErrorOf(const figure::FigureConstraint& c, const BodyList& bodies,
+JointError jointErrorOf(const figure::FigureConstraint& c, BodyList bodies,
                         const std::pair<btTransform, btTransform>& frames, const btTransform& spawn) {
     return jointError(
         c, [&](int i) -> const btTransform& { return bodies[static_cast<std::size_t>(i)]->getCenterOfMassTransform(); },
@@ -65,14 +65,14 @@ JointError jointErrorOf(const figure::FigureConstraint& c, std::span<const btTra
         c, [&](int i) -> const btTransform& { return bodies[static_cast<std::size_t>(i)]; }, frames, spawn);
 }
 
-std::vector<figure::Transform> bodyTransformsOf(const BodyList& bodies) {
+std::vector<figure::Transform> bodyTransformsOf(BodyList bodies) {
     std::vector<figure::Transform> out;
     out.reserve(bodies.size());
     for (const auto& b : bodies) out.push_back(toEigen(b->getCenterOfMassTransform()));
     return out;
 }
 
-std::vector<figure::BodyState> bodyStatesOf(const BodyList& bodies) {
+std::vector<figure::BodyState> bodyStatesOf(BodyList bodies) {
     std::vector<figure::BodyState> out;
     out.reserve(bodies.size());
     for (const auto& b : bodies)
@@ -81,7 +81,7 @@ std::vector<figure::BodyState> bodyStatesOf(const BodyList& bodies) {
     return out;
 }
 
-int awakeCountOf(const BodyList& bodies) {
+int awakeCountOf(BodyList bodies) {
     int n = 0;
     for (const auto& b : bodies) n += b->isActive() ? 1 : 0;
     return n;
@@ -132,7 +132,7 @@ bool RestTest::updateWith(std::size_t count, const Get& get, double dt, double a
     return speedsLow;
 }
 
-bool RestTest::update(const BodyList& bodies, double dt, double activeTime) {
+bool RestTest::update(BodyList bodies, double dt, double activeTime) {
     return updateWith(
         bodies.size(),
         [&](std::size_t i) {

@@ -7,6 +7,7 @@
 
 #include "EngineFriction.h"
 #include "Multibody.h"
+#include "ObjectArena.h"
 #include "afb/bullet/Constraints.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollWorld.h"
@@ -184,9 +185,13 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& wor
     }
     m_group = options.collisionGroup;
     m_spawnMask = options.collisionMask;
+    // One arena for the instance's Bullet objects, sized by what the figure's last instance took.
+    const auto [bytes, objects] = m_asset->instanceArenaHint();
+    m_arena = std::make_unique<detail::ObjectArena>(bytes, objects);
     addBodies();
     m_action->remember();
     addConstraints();
+    m_asset->noteInstanceArena(m_arena->bytesUsed(), m_arena->objectCount());
     filterPairs();
     m_world.addAction(m_action.get());
     if (options.startAtRest) putToRest();
@@ -351,15 +356,14 @@ void Ragdoll::freezeBodies() {
     btDispatcher* dispatcher = m_world.getDispatcher();
     for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
         const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
-        const bool ours = std::any_of(m_bodies.begin(), m_bodies.end(), [&](const auto& b) {
-            return b.get() == m->getBody0() || b.get() == m->getBody1();
-        });
+        const bool ours = std::any_of(m_bodies.begin(), m_bodies.end(),
+                                      [&](const auto& b) { return b == m->getBody0() || b == m->getBody1(); });
         for (int c = 0; ours && c < m->getNumContacts(); ++c) {
             const double depth = -static_cast<double>(m->getContactPoint(c).getDistance());
             if (depth > m_frozenContact.depthM) m_frozenContact = {depth, m->getBody0(), m->getBody1()};
         }
     }
-    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
+    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(*it);
     for (std::size_t i = 0; i < m_bodies.size(); ++i) {
         btRigidBody& b = *m_bodies[i];
         m_world.removeRigidBody(&b);
@@ -396,7 +400,7 @@ void Ragdoll::sink() {
     // Asleep, as Bullet makes a static rigid body: the world then skips its AABB (it never moves) like a sleeping
     // body's; an active object meeting it still gets a manifold (wakeTouched).
     m_restProxy->setActivationState(ISLAND_SLEEPING);
-    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(*it);
     m_world.addCollisionObject(m_restProxy.get(), btBroadphaseProxy::StaticFilter,
                                mask & ~btBroadphaseProxy::StaticFilter);
 }
@@ -407,7 +411,7 @@ void Ragdoll::surface() {
     m_restProxy.reset();
     m_restProxyShape.reset();
     for (std::size_t i = 0; i < m_bodies.size(); ++i)
-        m_world.addRigidBody(m_bodies[i].get(), btBroadphaseProxy::StaticFilter,
+        m_world.addRigidBody(m_bodies[i], btBroadphaseProxy::StaticFilter,
                              m_masks[i] & ~btBroadphaseProxy::StaticFilter);
 }
 
@@ -424,7 +428,7 @@ void Ragdoll::thawBodies() {
         m_world.addRigidBody(&b, m_group, m_masks[i]);
         b.setSleepingThresholds(0, 0);
     }
-    for (const auto& constraint : m_constraints) m_world.addConstraint(constraint.get());
+    for (btTypedConstraint* constraint : m_constraints) m_world.addConstraint(constraint);
 }
 
 void Ragdoll::wake() {
@@ -450,8 +454,8 @@ void Ragdoll::rememberGoodState() { m_action->remember(); }
 void Ragdoll::removeBulletObjects() {
     surface();
     if (!m_frozen)
-        for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
-    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+        for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(*it);
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(*it);
     m_frozen = false;
     m_calmSubsteps = 0;
     m_action->frictions.clear();
@@ -463,6 +467,7 @@ void Ragdoll::removeBulletObjects() {
     m_feedback.clear();
     m_bodies.clear();
     m_masks.clear();
+    m_arena->clear(); // after the lists of its objects: the objects themselves
 }
 
 int Ragdoll::guardTrips() const { return m_action->trips; }
@@ -483,8 +488,8 @@ Ragdoll::~Ragdoll() {
     surface();               // its bodies back in the world, to be removed with the rest
     if (m_multibody) return; // its destructor removes its trees, colliders and constraints
     m_world.removeAction(m_action.get());
-    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(it->get());
-    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(it->get());
+    for (auto it = m_constraints.rbegin(); it != m_constraints.rend(); ++it) m_world.removeConstraint(*it);
+    for (auto it = m_bodies.rbegin(); it != m_bodies.rend(); ++it) m_world.removeRigidBody(*it);
 }
 
 namespace {
@@ -515,7 +520,7 @@ void Ragdoll::addBodies() {
         info.m_restitution = static_cast<btScalar>(kBodyRestitution);
         info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
         info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
-        auto body = std::make_unique<FigureRigidBody>(info);
+        FigureRigidBody* body = m_arena->make<FigureRigidBody>(info);
         body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
         if (m_method.ccd == CcdPolicy::FastBodies) {
             // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
@@ -535,8 +540,8 @@ void Ragdoll::addBodies() {
             body->setUserIndex2(kEngineFrictionMarker);
             body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
         }
-        m_world.addRigidBody(body.get(), m_group, mask);
-        m_bodies.push_back(std::move(body));
+        m_world.addRigidBody(body, m_group, mask);
+        m_bodies.push_back(body);
         m_masks.push_back(mask);
     }
 }
@@ -562,6 +567,7 @@ std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const 
 
 void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
+    detail::ObjectArena& arena = *m_arena;
     const int iterations = m_method.jointIterations;
     const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
     // At most a main constraint, its friction and a limit per joint.
@@ -588,13 +594,13 @@ void Ragdoll::addConstraints() {
         // Directions fixed in body1 and in body2 as Bullet sees the rigid bodies' frames (world for the world).
         const btMatrix3x3& b1Rot = offsetA.getBasis();
         const btMatrix3x3 b2Rot = c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis();
-        std::unique_ptr<btTypedConstraint> main;
-        std::unique_ptr<btTypedConstraint> limit;
+        btTypedConstraint* main = nullptr;
+        btTypedConstraint* limit = nullptr;
         btMatrix3x3 frictionAxes = fb.getBasis();
         int frictionRows = 0;
 
         switch (c.type) {
-        case JointType::Fixed: main = std::make_unique<btFixedConstraint>(a, b, fa, fb); break;
+        case JointType::Fixed: main = arena.make<btFixedConstraint>(a, b, fa, fb); break;
         case JointType::BallAndSocket:
             frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
             frictionRows = 3;
@@ -614,27 +620,27 @@ void Ragdoll::addConstraints() {
                 const btScalar h = static_cast<btScalar>(cone->halfAngleRad);
                 if (policy.speculative) {
                     // Our own cone row (speculative); the anchor alone is a point-to-point.
-                    main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
-                    limit = std::make_unique<DirectionLimitConstraint>(a, b, shaftA, frameBRot, LimitShape::Cone, h, 0,
-                                                                       policy);
+                    main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+                    limit = arena.make<DirectionLimitConstraint>(a, b, shaftA, frameBRot, LimitShape::Cone, h,
+                                                                 btScalar(0), policy);
                 } else {
-                    auto ct = std::make_unique<btConeTwistConstraint>(a, b, frameA, frameB);
+                    auto* ct = arena.make<btConeTwistConstraint>(a, b, frameA, frameB);
                     ct->setLimit(h, h, btScalar(-1), btScalar(1), policy.errorReduction, btScalar(1));
-                    main = std::move(ct);
+                    main = ct;
                 }
             } else {
-                main = std::make_unique<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+                main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
             }
             break;
         case JointType::Universal: {
             // No relative spin about the shafts (homokinetic, §4.4), swing free: our constant-velocity constraint
             // (Method::constantVelocityUniversal), or cone-twist with twist locked; frames' X axes are shaft 1
             // (body1) and −shaft 2 (body2), aligned at the load pose.
-            if (m_method.constantVelocityUniversal) main = std::make_unique<UniversalConstraint>(a, b, fa, fb);
+            if (m_method.constantVelocityUniversal) main = arena.make<UniversalConstraint>(a, b, fa, fb);
             else {
-                auto ct = std::make_unique<btConeTwistConstraint>(a, b, fa, fb);
+                auto* ct = arena.make<btConeTwistConstraint>(a, b, fa, fb);
                 ct->setLimit(SIMD_PI, SIMD_PI, 0);
-                main = std::move(ct);
+                main = ct;
             }
             frictionRows = 2;
             frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2],
@@ -642,21 +648,21 @@ void Ragdoll::addConstraints() {
             break;
         }
         case JointType::Hinge: {
-            auto h = std::make_unique<btHingeConstraint>(a, b, fa, fb, false);
+            auto* h = arena.make<btHingeConstraint>(a, b, fa, fb, false);
             if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
                 const btScalar lo = static_cast<btScalar>(range->lowerRad), hi = static_cast<btScalar>(range->upperRad);
-                if (policy.speculative) limit = std::make_unique<HingeRangeConstraint>(a, b, fa, fb, lo, hi, policy);
+                if (policy.speculative) limit = arena.make<HingeRangeConstraint>(a, b, fa, fb, lo, hi, policy);
                 else h->setLimit(lo, hi, 1, policy.errorReduction, 1);
             }
-            main = std::move(h);
+            main = h;
             frictionRows = 1;
             frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
             break;
         }
-        case JointType::Slider: main = makeSlider(a, b, fa, fb); break;
+        case JointType::Slider: main = arena.adopt(makeSlider(a, b, fa, fb)); break;
         case JointType::Spring: {
             const SpringConstraint::Params p = SpringConstraint::Params::of(c.spring);
-            main = std::make_unique<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
+            main = arena.make<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
             break;
         }
         }
@@ -664,21 +670,21 @@ void Ragdoll::addConstraints() {
         // Pyramid limits (ball) and every universal limit: our direction-limit rows.
         if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
             if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-                limit = std::make_unique<DirectionLimitConstraint>(a, b, b1Rot * toBt(p->shaftInBody1),
-                                                                   b2Rot * toBt(p->basisInBody2),
-                                                                   DirectionLimitConstraint::Shape::Pyramid,
-                                                                   static_cast<btScalar>(p->halfAngle1Rad),
-                                                                   static_cast<btScalar>(p->halfAngle2Rad), policy);
+                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(p->shaftInBody1),
+                                                             b2Rot * toBt(p->basisInBody2),
+                                                             DirectionLimitConstraint::Shape::Pyramid,
+                                                             static_cast<btScalar>(p->halfAngle1Rad),
+                                                             static_cast<btScalar>(p->halfAngle2Rad), policy);
             const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
             if (cone && c.type == JointType::Universal)
-                limit =
-                    std::make_unique<DirectionLimitConstraint>(a, b, b1Rot * toBt(cone->shaftInBody1),
-                                                               basisWithX(b2Rot * toBt(cone->axisInBody2)),
-                                                               DirectionLimitConstraint::Shape::Cone,
-                                                               static_cast<btScalar>(cone->halfAngleRad), 0, policy);
+                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(cone->shaftInBody1),
+                                                             basisWithX(b2Rot * toBt(cone->axisInBody2)),
+                                                             DirectionLimitConstraint::Shape::Cone,
+                                                             static_cast<btScalar>(cone->halfAngleRad), btScalar(0),
+                                                             policy);
         }
 
-        m_main.push_back(main.get());
+        m_main.push_back(main);
         if (iterations > 0) {
             if (main) main->setOverrideNumSolverIterations(iterations);
             if (limit) limit->setOverrideNumSolverIterations(iterations);
@@ -687,24 +693,24 @@ void Ragdoll::addConstraints() {
             // Collision between the joint's bodies is off through filterPairs (RigidLayout::ignoredPairs has every
             // pair a joint disables, §6.2), not through Bullet's constraint references, which would add the same
             // entry to each body's list again, with a linear search per constraint and body, at every spawn.
-            m_world.addConstraint(main.get());
+            m_world.addConstraint(main);
             if (c.friction > 0 && frictionRows > 0) {
-                auto fb2 = std::make_unique<btJointFeedback>();
-                main->setJointFeedback(fb2.get());
-                auto fr = std::make_unique<JointFrictionConstraint>(a, b, frictionAxes, frictionRows);
-                m_action->frictions.push_back({fr.get(), fb2.get(), static_cast<btScalar>(c.friction) * lever});
-                m_feedback.push_back(std::move(fb2));
-                m_constraints.push_back(std::move(main));
-                m_world.addConstraint(fr.get());
-                m_constraints.push_back(std::move(fr));
+                auto* fb2 = arena.make<btJointFeedback>();
+                main->setJointFeedback(fb2);
+                auto* fr = arena.make<JointFrictionConstraint>(a, b, frictionAxes, frictionRows);
+                m_action->frictions.push_back({fr, fb2, static_cast<btScalar>(c.friction) * lever});
+                m_feedback.push_back(fb2);
+                m_constraints.push_back(main);
+                m_world.addConstraint(fr);
+                m_constraints.push_back(fr);
             } else {
-                m_constraints.push_back(std::move(main));
+                m_constraints.push_back(main);
             }
         }
         m_limitRows.resize(m_constraints.size(), false);
         if (limit) {
-            m_world.addConstraint(limit.get());
-            m_constraints.push_back(std::move(limit));
+            m_world.addConstraint(limit);
+            m_constraints.push_back(limit);
             m_limitRows.push_back(true);
         }
     }

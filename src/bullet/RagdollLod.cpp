@@ -61,7 +61,7 @@ void Ragdoll::relayout(const figure::LodLevel* level) {
     FrozenContact contact = m_frozenContact;
     const auto bodyOf = [&](const btCollisionObject* o) {
         for (std::size_t k = 0; k < m_bodies.size(); ++k)
-            if (m_bodies[k].get() == o) return m_layout->rigids[k].representative;
+            if (m_bodies[k] == o) return m_layout->rigids[k].representative;
         return -1;
     };
     const int contactA = bodyOf(contact.a), contactB = bodyOf(contact.b);

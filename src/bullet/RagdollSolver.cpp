@@ -324,8 +324,8 @@ bool RagdollSolver::buildDirect() {
     for (int j = 0; j < pool.size(); ++j) {
         const btSolverConstraint& c = pool[j];
         if (c.m_lowerLimit > -unbounded || c.m_upperLimit < unbounded || c.m_jacDiagABInv == 0) continue;
-        const auto tracked = m_rows.find(static_cast<const btTypedConstraint*>(c.m_originalContactPoint));
-        if (tracked == m_rows.end() || !tracked->second.direct) continue;
+        const Tracked* tracked = m_rows.find(btHashPtr(c.m_originalContactPoint));
+        if (tracked == nullptr || !tracked->direct) continue;
         const bool da = dynamic(c.m_solverBodyIdA), db = dynamic(c.m_solverBodyIdB);
         if ((!da && !db) || (da && !unit(c.m_solverBodyIdA)) || (db && !unit(c.m_solverBodyIdB))) continue;
         d.bilateral[static_cast<std::size_t>(j)] = 1;
@@ -814,7 +814,7 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
                                                           btTypedConstraint** constraints, int numConstraints,
                                                           const btContactSolverInfo& infoGlobal,
                                                           btIDebugDraw* debugDrawer) {
-    if (!m_direct->enabled || m_rows.empty() || !buildDirect())
+    if (!m_direct->enabled || m_rows.size() == 0 || !buildDirect())
         return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(bodies, numBodies, manifoldPtr,
                                                                                       numManifolds, constraints,
                                                                                       numConstraints, infoGlobal,
@@ -849,9 +849,16 @@ RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
 RagdollSolver::~RagdollSolver() = default;
 
 void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct) {
-    Tracked& t = m_rows[&constraint];
+    const btHashPtr key(&constraint);
+    if (Tracked* t = m_rows.find(key)) {
+        t->warmStart = warmStart;
+        t->direct = direct;
+        return;
+    }
+    Tracked t;
     t.warmStart = warmStart;
     t.direct = direct;
+    m_rows.insert(key, t);
 }
 
 void RagdollSolver::convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
@@ -874,22 +881,21 @@ void RagdollSolver::convertContacts(btPersistentManifold** manifoldPtr, int numM
     btSequentialImpulseConstraintSolver::convertContacts(manifoldPtr, numManifolds, infoGlobal);
 }
 
-void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.erase(&constraint); }
+void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.remove(btHashPtr(&constraint)); }
 
 void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstraints,
                                   const btContactSolverInfo& infoGlobal) {
     btSequentialImpulseConstraintSolver::convertJoints(constraints, numConstraints, infoGlobal);
-    if (m_rows.empty() || (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) == 0) return;
+    if (m_rows.size() == 0 || (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) == 0) return;
     // The base class lays the rows out constraint by constraint, in the order given, m_numConstraintRows each.
     int row = 0;
     for (int i = 0; i < numConstraints; ++i) {
         const int rows = m_tmpConstraintSizesPool[i].m_numConstraintRows;
-        const auto it = m_rows.find(constraints[i]);
-        if (it != m_rows.end() && it->second.warmStart && static_cast<int>(it->second.impulses.size()) == rows) {
+        const Tracked* t = m_rows.find(btHashPtr(constraints[i]));
+        if (t != nullptr && t->warmStart && t->rows == rows) {
             for (int k = 0; k < rows; ++k) {
                 btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[row + k];
-                const btScalar start =
-                    it->second.impulses[static_cast<std::size_t>(k)] * infoGlobal.m_warmstartingFactor;
+                const btScalar start = t->impulses[k] * infoGlobal.m_warmstartingFactor;
                 c.m_appliedImpulse = btMax(c.m_lowerLimit, btMin(c.m_upperLimit, start));
                 if (c.m_appliedImpulse == 0) continue;
                 // As a solver iteration applies a row's impulse (resolveSingleConstraintRowGeneric).
@@ -907,19 +913,20 @@ void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstr
 
 btScalar RagdollSolver::solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                                       const btContactSolverInfo& infoGlobal) {
-    if (!m_rows.empty()) {
+    if (m_rows.size() > 0) {
         // Rows of one constraint are consecutive; each row names its constraint.
-        std::vector<btScalar>* impulses = nullptr;
+        Tracked* t = nullptr;
         const void* current = nullptr;
         for (int j = 0; j < m_tmpSolverNonContactConstraintPool.size(); ++j) {
             const btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[j];
             if (c.m_originalContactPoint != current) {
                 current = c.m_originalContactPoint;
-                const auto it = m_rows.find(static_cast<const btTypedConstraint*>(current));
-                impulses = it != m_rows.end() ? &it->second.impulses : nullptr;
-                if (impulses) impulses->clear();
+                t = m_rows.find(btHashPtr(current));
+                if (t) t->rows = 0;
             }
-            if (impulses) impulses->push_back(c.m_appliedImpulse);
+            if (t == nullptr || t->rows < 0) continue;
+            if (t->rows == Tracked::kMaxRows) t->rows = -1; // more rows than kept: not warm-started
+            else t->impulses[t->rows++] = c.m_appliedImpulse;
         }
     }
     return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyFinish(bodies, numBodies, infoGlobal);

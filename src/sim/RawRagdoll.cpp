@@ -88,7 +88,7 @@ class RawRagdoll::Observer : public btActionInterface {
     void updateAction(btCollisionWorld*, btScalar dt) override {
         if (!m_enabled || atRest) return;
         m_activeSeconds += dt;
-        atRest = m_rest.update(m_owner.m_bodies, dt, m_activeSeconds);
+        atRest = m_rest.update(m_owner.m_bodyList, dt, m_activeSeconds);
     }
     void debugDraw(btIDebugDraw*) override {}
 
@@ -139,6 +139,7 @@ void RawRagdoll::addBodies(const bullet::SpawnOptions& options, const bullet::Me
         if (figure::attachedToWorld(f, static_cast<int>(i))) mask &= ~btBroadphaseProxy::StaticFilter;
         if (b.clipMask == 0) mask = 0; // §6.2
         m_world.addRigidBody(body.get(), options.collisionGroup, mask);
+        m_bodyList.push_back(body.get());
         m_bodies.push_back(std::move(body));
     }
 }
@@ -236,18 +237,18 @@ void RawRagdoll::filterPairs() {
 }
 
 std::pair<btTransform, btTransform> RawRagdoll::constraintFramesWorld(int i) const {
-    return bullet::constraintFramesWorldOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
+    return bullet::constraintFramesWorldOf(figure().constraints[static_cast<std::size_t>(i)], m_bodyList,
                                            m_frames[static_cast<std::size_t>(i)]);
 }
 
 bullet::JointError RawRagdoll::jointError(int i) const {
-    return bullet::jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], m_bodies,
+    return bullet::jointErrorOf(figure().constraints[static_cast<std::size_t>(i)], m_bodyList,
                                 m_frames[static_cast<std::size_t>(i)], m_spawn);
 }
 
-std::vector<figure::Transform> RawRagdoll::bodyTransforms() const { return bullet::bodyTransformsOf(m_bodies); }
-std::vector<figure::BodyState> RawRagdoll::bodyStates() const { return bullet::bodyStatesOf(m_bodies); }
-int RawRagdoll::awakeBodyCount() const { return bullet::awakeCountOf(m_bodies); }
+std::vector<figure::Transform> RawRagdoll::bodyTransforms() const { return bullet::bodyTransformsOf(m_bodyList); }
+std::vector<figure::BodyState> RawRagdoll::bodyStates() const { return bullet::bodyStatesOf(m_bodyList); }
+int RawRagdoll::awakeBodyCount() const { return bullet::awakeCountOf(m_bodyList); }
 bool RawRagdoll::atRest() const { return m_observer->atRest; }
 
 } // namespace afb::sim

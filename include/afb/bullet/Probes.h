@@ -21,8 +21,8 @@ struct JointError {
     double limitExcessRad = 0; ///< how far a cone, pyramid or hinge limit is exceeded; 0 inside or without one
 };
 
-/// A ragdoll's bodies in figure body order, as bullet::Ragdoll and sim::RawRagdoll hold them.
-using BodyList = std::vector<std::unique_ptr<btRigidBody>>;
+/// A ragdoll's bodies in figure body order (bullet::Ragdoll's and sim::RawRagdoll's).
+using BodyList = std::span<btRigidBody* const>;
 
 /// One body's state as any backend can give it (a btMultiBody link has no btRigidBody): the body frame (centre
 /// of mass, principal axes) and its velocities, world.
@@ -34,13 +34,13 @@ struct BodySample {
 
 /// The constraint frame of constraint `c` as attached to body1 and to body2 (or the world), world space now, from
 /// `frames`: the frame in body1's frame and in body2's frame (world for a world constraint).
-std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c, const BodyList& bodies,
+std::pair<btTransform, btTransform> constraintFramesWorldOf(const figure::FigureConstraint& c, BodyList bodies,
                                                             const std::pair<btTransform, btTransform>& frames);
 
 /// The error of constraint `c` (frames as for constraintFramesWorldOf; `spawn`: the entity transform, whose
 /// rotation stands for body2's in a world constraint): the distance of the two frames' origins, and
 /// figure::limitExcessRad in double.
-JointError jointErrorOf(const figure::FigureConstraint& c, const BodyList& bodies,
+JointError jointErrorOf(const figure::FigureConstraint& c, BodyList bodies,
                         const std::pair<btTransform, btTransform>& frames, const btTransform& spawn);
 
 /// The same two, from the bodies' world transforms (body frames) in figure body order.
@@ -51,11 +51,11 @@ JointError jointErrorOf(const figure::FigureConstraint& c, std::span<const btTra
                         const std::pair<btTransform, btTransform>& frames, const btTransform& spawn);
 
 /// World transforms of the bodies (body frames: centre of mass, principal axes), metres.
-std::vector<figure::Transform> bodyTransformsOf(const BodyList& bodies);
+std::vector<figure::Transform> bodyTransformsOf(BodyList bodies);
 /// World transforms and velocities of the bodies.
-std::vector<figure::BodyState> bodyStatesOf(const BodyList& bodies);
+std::vector<figure::BodyState> bodyStatesOf(BodyList bodies);
 /// Bodies Bullet is simulating now (not asleep).
-int awakeCountOf(const BodyList& bodies);
+int awakeCountOf(BodyList bodies);
 
 /// The engine's TestIfAtRest (af-format §6.1) over a figure's bodies, one call per simulation step: speeds and
 /// accelerations under the suspend speeds, or no body moved more than noMoveTranslation / noMoveRotation over a
@@ -66,7 +66,7 @@ class RestTest {
 
     /// After a step of `dtSeconds`, `activeSeconds` after the figure last woke: true when the rules say the
     /// bodies (in figure body order) are at rest now.
-    bool update(const BodyList& bodies, double dtSeconds, double activeSeconds);
+    bool update(BodyList bodies, double dtSeconds, double activeSeconds);
     /// The same from body samples (any backend), in figure body order.
     bool update(std::span<const BodySample> bodies, double dtSeconds, double activeSeconds);
     /// Forgets the window and the previous velocities (the figure woke).

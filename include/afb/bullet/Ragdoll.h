@@ -21,7 +21,8 @@ namespace afb::bullet {
 class RagdollWorld;
 namespace detail {
 class MultibodyRagdoll;
-}
+class ObjectArena;
+} // namespace detail
 
 /// Restitution of every AF body (af-format §3.4: the engine's fixed value; it applies it above 2 units/s only).
 inline constexpr double kBodyRestitution = 0.4;
@@ -298,13 +299,14 @@ class Ragdoll {
     Method m_method;
     bool m_engineFriction = false;
     btTransform m_spawn;
-    std::vector<std::unique_ptr<btRigidBody>> m_bodies;            ///< one per rigid of m_layout
-    std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
-    std::vector<bool> m_limitRows; ///< per Bullet constraint: one of our limit constraints
-    int m_group = 0;               ///< collision group of every body
-    int m_spawnMask = 0;           ///< SpawnOptions::collisionMask
-    std::vector<int> m_masks;      ///< collision mask of each rigid body
-    bool m_frozen = false;         ///< see frozen()
+    std::unique_ptr<detail::ObjectArena> m_arena;  ///< owns the bodies, constraints and feedback below
+    std::vector<btRigidBody*> m_bodies;            ///< one per rigid of m_layout
+    std::vector<btTypedConstraint*> m_constraints; ///< in the order added to the world
+    std::vector<bool> m_limitRows;                 ///< per Bullet constraint: one of our limit constraints
+    int m_group = 0;                               ///< collision group of every body
+    int m_spawnMask = 0;                           ///< SpawnOptions::collisionMask
+    std::vector<int> m_masks;                      ///< collision mask of each rigid body
+    bool m_frozen = false;                         ///< see frozen()
     FrozenContact m_frozenContact;
     std::unique_ptr<btBoxShape> m_restProxyShape;   ///< see sunk()
     std::unique_ptr<btCollisionObject> m_restProxy; ///< see sunk()
@@ -312,7 +314,7 @@ class Ragdoll {
     std::vector<btTypedConstraint*> m_main;
     std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint, see constraintFramesLocal
     std::vector<std::pair<btTransform, btTransform>> m_rigidFrames; ///< see rigidFramesLocal
-    std::vector<std::unique_ptr<btJointFeedback>> m_feedback;
+    std::vector<btJointFeedback*> m_feedback;
     std::unique_ptr<Action> m_action;
     std::unique_ptr<RigidLayout> m_lodLayout;                      ///< the level of detail in force, or null
     std::vector<std::unique_ptr<btCollisionShape>> m_lodCompounds; ///< its compound shapes

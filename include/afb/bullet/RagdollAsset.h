@@ -1,5 +1,7 @@
 #pragma once
 // The Bullet half of a Figure that every live Ragdoll shares: collision shapes, built once.
+#include <atomic>
+#include <cstddef>
 #include <memory>
 #include <span>
 #include <utility>
@@ -96,6 +98,20 @@ class RagdollAsset {
     RigidLayout layoutAt(const figure::LodLevel& level, std::span<const figure::Transform> poses,
                          std::vector<std::unique_ptr<btCollisionShape>>& compounds) const;
 
+    /// Bytes and objects one instance's Bullet objects took (the most of any instance so far; 0 before the
+    /// first): Ragdoll sizes its arena from it. Thread-safe; not for callers.
+    std::pair<std::size_t, std::size_t> instanceArenaHint() const {
+        return {m_arenaBytes.load(std::memory_order_relaxed), m_arenaObjects.load(std::memory_order_relaxed)};
+    }
+    void noteInstanceArena(std::size_t bytes, std::size_t objects) const {
+        for (std::size_t seen = m_arenaBytes.load(std::memory_order_relaxed);
+             bytes > seen && !m_arenaBytes.compare_exchange_weak(seen, bytes, std::memory_order_relaxed);) {
+        }
+        for (std::size_t seen = m_arenaObjects.load(std::memory_order_relaxed);
+             objects > seen && !m_arenaObjects.compare_exchange_weak(seen, objects, std::memory_order_relaxed);) {
+        }
+    }
+
   private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
     figure::Figure m_figure;
@@ -108,6 +124,7 @@ class RagdollAsset {
     std::vector<std::unique_ptr<btCollisionShape>> m_compounds; ///< of m_merged's rigids of several bodies
     RigidLayout m_separate;
     RigidLayout m_merged;
+    mutable std::atomic<std::size_t> m_arenaBytes{0}, m_arenaObjects{0}; ///< see instanceArenaHint
     void buildLayout(RigidLayout& layout, bool mergeFixed);
     void fillLayout(RigidLayout& layout, const std::vector<std::vector<int>>& groups,
                     std::span<const figure::Transform> poses,

@@ -9,9 +9,9 @@
 // does for contacts (README: Methods).
 #include <functional>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
+#include <LinearMath/btHashMap.h>
 #include <btBulletDynamicsCommon.h>
 
 namespace afb::bullet {
@@ -35,7 +35,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// Forget `constraint` (call before it is destroyed).
     void untrack(const btTypedConstraint& constraint);
     /// How many constraints are tracked.
-    std::size_t trackedCount() const { return m_rows.size(); }
+    std::size_t trackedCount() const { return static_cast<std::size_t>(m_rows.size()); }
 
     /// The direct joint solve (Method::directJoints): each iteration solves the unbounded rows of the constraints
     /// tracked with `direct` exactly, per connected group of bodies (an LDLᵀ factorisation of J M⁻¹ Jᵀ per group
@@ -66,8 +66,12 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
 
   private:
     ContactWarmStartCap m_contactCap;
+    /// A tracked constraint: its rows' last impulses, inline (a constraint has at most 12 rows: six axes, each
+    /// with a limit and a motor; one with more is not warm-started).
     struct Tracked {
-        std::vector<btScalar> impulses; ///< last impulse of every row
+        static constexpr int kMaxRows = 12;
+        btScalar impulses[kMaxRows] = {};
+        int rows = -1; ///< how many impulses were kept on the last step (−1: none, or more than kMaxRows)
         bool warmStart = true;
         bool direct = false;
     };
@@ -76,7 +80,9 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     btScalar solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal);
     void solveDirectSplitImpulse(const btContactSolverInfo& infoGlobal);
 
-    std::unordered_map<const btTypedConstraint*, Tracked> m_rows;
+    // Flat (Bullet's open hash map): tracking a constraint at spawn allocates nothing once the table has grown,
+    // where a node-based map allocated a node and an impulse vector per constraint.
+    btHashMap<btHashPtr, Tracked> m_rows;
     std::unique_ptr<Direct> m_direct;
 };
 

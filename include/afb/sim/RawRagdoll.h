@@ -109,6 +109,7 @@ class RawRagdoll {
     btDynamicsWorld& m_world;
     btTransform m_spawn;
     std::vector<std::unique_ptr<btRigidBody>> m_bodies;
+    std::vector<btRigidBody*> m_bodyList; ///< m_bodies as the probes take them (bullet::BodyList)
     std::vector<std::unique_ptr<btTypedConstraint>> m_constraints; ///< in the order added to the world
     std::vector<btTypedConstraint*> m_main;                        ///< per figure constraint (nullptr: spring)
     std::vector<std::pair<btTransform, btTransform>> m_frames;     ///< per figure constraint: in body1, in body2
