@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
+
 #include "EngineFriction.h"
 #include "Multibody.h"
 #include "ObjectArena.h"
@@ -317,8 +319,11 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
 bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint) {
     const std::vector<int>& owners = figure().jointBody;
     if (joint < 0 || static_cast<std::size_t>(joint) >= owners.size()) return false;
-    const int body = owners[static_cast<std::size_t>(joint)];
-    if (body < 0 || impulse.length() < impulseThresholdNs()) return false;
+    return applyBodyImpulse(owners[static_cast<std::size_t>(joint)], impulse, worldPoint);
+}
+
+bool Ragdoll::applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint) {
+    if (body < 0 || body >= bodyCount() || impulse.length() < impulseThresholdNs()) return false;
     if (m_multibody) {
         m_multibody->wake();
         m_multibody->applyImpulse(body, impulse, worldPoint);
@@ -328,6 +333,32 @@ bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3&
     wake();
     b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
     return true;
+}
+
+int Ragdoll::figureBodyOf(const btCollisionObject& object, const btVector3& worldPoint) const {
+    if (m_multibody) {
+        for (int i = 0; i < bodyCount(); ++i)
+            if (&collisionObject(i) == &object) return i;
+        return -1;
+    }
+    const auto rigid = std::find(m_bodies.begin(), m_bodies.end(), &object);
+    if (rigid == m_bodies.end()) return -1;
+    const RigidLayout::Rigid& r = m_layout->rigids[static_cast<std::size_t>(rigid - m_bodies.begin())];
+    if (r.bodies.size() == 1) return r.bodies.front();
+    // Several bodies in one compound: the one whose surface is nearest the point (deepest, for a point inside).
+    int best = r.representative;
+    btScalar nearest = BT_LARGE_FLOAT;
+    const btTransform& frame = (*rigid)->getWorldTransform();
+    for (const int b : r.bodies) {
+        const auto* shape = static_cast<const btConvexShape*>(m_asset->shape(b));
+        btGjkEpaSolver2::sResults result;
+        const btScalar d = btGjkEpaSolver2::SignedDistance(worldPoint, 0, shape, frame * bodyInRigid(b), result);
+        if (d < nearest) {
+            nearest = d;
+            best = b;
+        }
+    }
+    return best;
 }
 
 bool Ragdoll::atRest() const { return m_multibody ? m_multibody->atRest() : m_action->atRest; }

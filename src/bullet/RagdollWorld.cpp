@@ -445,6 +445,14 @@ void RagdollWorld::step(double dtSeconds) {
     m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
 }
 
+Ragdoll* RagdollWorld::ragdollOf(const btCollisionObject* object) const {
+    if (object == nullptr) return nullptr;
+    if (const BodyOwner* owned = ownerOf(object)) return m_ragdolls[static_cast<std::size_t>(owned->ragdoll)];
+    for (Ragdoll* r : m_ragdolls)
+        if (r->m_restProxy.get() == object) return r;
+    return nullptr;
+}
+
 void RagdollWorld::attach(Ragdoll& r) {
     markSpeculative(r);
     trackJoints(r);

@@ -386,3 +386,61 @@ TEST_CASE("lod: the multibody backend refuses a level of detail", "[bullet][lod]
     CHECK_THAT(r.setLod(figure::automaticLod(loaded.figure, 6)), Catch::Contains("rigid backend only"));
     CHECK_FALSE(r.lodActive());
 }
+
+TEST_CASE("hits: a ray names the ragdoll and the figure body it hit, merged bodies included", "[bullet][lod]") {
+    // Rays from outside the figure aimed at the centre of an extremity (head, hands, feet) hit that body first;
+    // the hands are merged with their forearms (fixed wrists), and at LOD 6 more bodies share a rigid.
+    const auto loaded = test::loadEntity("humanoid");
+    const figure::Figure& f = loaded.figure;
+    const auto asset = bullet::RagdollAsset::create(f);
+    sim::SceneSettings noGround;
+    noGround.ground = false; // rays come from below the feet
+    sim::Scene scene(*bullet::methodPreset("default"), noGround);
+    bullet::Ragdoll& r = scene.spawn(asset, dropWhere());
+    btCollisionObject stranger; // not a ragdoll's
+    btBoxShape box(btVector3(1, 1, 1));
+    stranger.setCollisionShape(&box);
+    const int lHand = bodyNamed(f, "l_hand");
+    REQUIRE(r.rigidIndexOf(lHand) == r.rigidIndexOf(bodyNamed(f, "l_forearm")));
+    const std::vector<figure::Transform> poses = r.bodyTransforms();
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const figure::Transform& t : poses) centre += t.position / static_cast<double>(poses.size());
+    auto check = [&](const char* what) {
+        INFO(what);
+        for (const char* name : {"head", "l_hand", "r_hand", "l_foot", "r_foot"}) {
+            INFO(name);
+            const int body = bodyNamed(f, name);
+            const Eigen::Vector3d target = poses[static_cast<std::size_t>(body)].position;
+            const btVector3 to = bullet::toBt(target),
+                            from = bullet::toBt(Eigen::Vector3d(target + 3.0 * (target - centre).normalized()));
+            btCollisionWorld::ClosestRayResultCallback ray(from, to);
+            scene.world().rayTest(from, to, ray);
+            REQUIRE(ray.hasHit());
+            CHECK(scene.ragdollWorld().ragdollOf(ray.m_collisionObject) == &r);
+            CHECK(r.figureBodyOf(*ray.m_collisionObject, ray.m_hitPointWorld) == body);
+        }
+        CHECK(scene.ragdollWorld().ragdollOf(&stranger) == nullptr);
+        CHECK(r.figureBodyOf(stranger, btVector3(0, 0, 0)) == -1);
+    };
+    check("merged wrists");
+    REQUIRE(r.setLod(figure::automaticLod(f, 6)).empty());
+    check("LOD 6");
+}
+
+TEST_CASE("hits: an impulse on a figure body moves that body by impulse over mass", "[bullet]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const figure::Figure& f = loaded.figure;
+    const auto asset = bullet::RagdollAsset::create(f);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::Ragdoll& r = scene.spawn(asset, dropWhere());
+    const int head = bodyNamed(f, "head");
+    REQUIRE(r.layout().rigids[static_cast<std::size_t>(r.rigidIndexOf(head))].bodies.size() == 1);
+    const btVector3 impulse(0, 40, 0); // N·s, above the wake threshold
+    CHECK_FALSE(r.applyBodyImpulse(r.bodyCount(), impulse, btVector3(0, 0, 0)));
+    CHECK_FALSE(r.applyBodyImpulse(head, impulse * btScalar(1e-3), r.body(head).getCenterOfMassPosition()));
+    const btVector3 before = r.body(head).getLinearVelocity();
+    REQUIRE(r.applyBodyImpulse(head, impulse, r.body(head).getCenterOfMassPosition()));
+    const btVector3 change = r.body(head).getLinearVelocity() - before;
+    CHECK(double(change.y()) == Approx(40.0 / f.bodies[static_cast<std::size_t>(head)].massKg).epsilon(1e-5));
+    CHECK(double(r.body(head).getAngularVelocity().length()) == Approx(0).margin(1e-6));
+}

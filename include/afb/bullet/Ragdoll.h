@@ -224,6 +224,13 @@ class Ragdoll {
     /// §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine units,
     /// 500·metresPerUnit N·s) or on a joint no body contains is ignored: returns false.
     bool applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint);
+    /// The same on figure body `body` (figureBodyOf a ray hit, say); false for a body out of range.
+    bool applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint);
+    /// Which figure body a ray or contact test hit: `object` one of this ragdoll's collision objects, `worldPoint`
+    /// the hit point. A rigid body that carries several merged bodies (Method::mergeFixed, setLod) answers with the
+    /// one whose surface is nearest the point. −1 when `object` is not this ragdoll's (a sunk ragdoll's box is not a
+    /// body: surface() it first; RagdollWorld::ragdollOf finds the ragdoll of either).
+    int figureBodyOf(const btCollisionObject& object, const btVector3& worldPoint) const;
     /// The wake threshold of applyImpulse, N·s.
     double impulseThresholdNs() const { return 500.0 * figure().units.metresPerUnit; }
 

@@ -71,6 +71,10 @@ class RagdollWorld {
     void setSinking(bool on) { m_sinking = on; }
     bool sinking() const { return m_sinking; }
 
+    /// The ragdoll spawned through this world that `object` belongs to (one of its bodies, or the box of a sunk
+    /// ragdoll), or null: what a ray or contact test hit (then Ragdoll::figureBodyOf for the body).
+    Ragdoll* ragdollOf(const btCollisionObject* object) const;
+
     /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
     void attach(Ragdoll& ragdoll);
     void detach(Ragdoll& ragdoll);
