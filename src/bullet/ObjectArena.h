@@ -32,7 +32,7 @@ class ObjectArena {
     template <typename T, typename... Args>
     T* make(Args&&... args) {
         void* at = allocate(sizeof(T), std::max<std::size_t>(alignof(T), kAlign));
-        m_objects.reserve(m_objects.size() + 1); // before the construction, so that pushing cannot throw after it
+        roomForOne(); // before the construction, so that pushing cannot throw after it
         T* object = ::new (at) T(std::forward<Args>(args)...);
         m_objects.push_back({object, [](void* p) { static_cast<T*>(p)->~T(); }});
         return object;
@@ -41,7 +41,7 @@ class ObjectArena {
     /// Takes over an object made elsewhere (deleted, not destroyed in place, by clear()).
     template <typename T>
     T* adopt(std::unique_ptr<T> object) {
-        m_objects.reserve(m_objects.size() + 1);
+        roomForOne();
         T* raw = object.release();
         m_objects.push_back({raw, [](void* p) { delete static_cast<T*>(p); }});
         return raw;
@@ -73,6 +73,11 @@ class ObjectArena {
         void* object;
         void (*destroy)(void*);
     };
+
+    void roomForOne() {
+        if (m_objects.size() == m_objects.capacity())
+            m_objects.reserve(std::max<std::size_t>(16, 2 * m_objects.size()));
+    }
 
     void* allocate(std::size_t size, std::size_t align) {
         if (!m_blocks.empty()) {
