@@ -79,24 +79,27 @@ class ObjectArena {
             m_objects.reserve(std::max<std::size_t>(16, 2 * m_objects.size()));
     }
 
+    // The offset in `block` of the first `align`-aligned address at or after offset `from`.
+    static std::size_t alignedOffset(const Block& block, std::size_t from, std::size_t align) {
+        const auto base = reinterpret_cast<std::uintptr_t>(block.bytes.get());
+        return static_cast<std::size_t>((base + from + align - 1) / align * align - base);
+    }
+
     void* allocate(std::size_t size, std::size_t align) {
         if (!m_blocks.empty()) {
-            const std::size_t at = (m_used + align - 1) / align * align;
+            const std::size_t at = alignedOffset(m_blocks.back(), m_used, align);
             if (at + size <= m_blocks.back().size) {
                 m_used = at + size;
                 return m_blocks.back().bytes.get() + at;
             }
         }
-        // A block aligned to kAlign starts every object aligned to align (a power of two up to kAlign, or the
-        // block is padded for more).
-        const std::size_t bytes = std::max(m_next, size + align);
+        const std::size_t bytes = std::max(m_next, size + align); // room for the object wherever the block starts
         Block b{std::unique_ptr<std::byte[], Free>(
                     static_cast<std::byte*>(::operator new[](bytes, std::align_val_t(kAlign)))),
                 bytes};
         m_usedBefore = bytesUsed();
         m_blocks.push_back(std::move(b));
-        const auto base = reinterpret_cast<std::uintptr_t>(m_blocks.back().bytes.get());
-        const std::size_t at = (align - base % align) % align;
+        const std::size_t at = alignedOffset(m_blocks.back(), 0, align);
         m_used = at + size;
         return m_blocks.back().bytes.get() + at;
     }

@@ -63,6 +63,13 @@ TEST_CASE("arena: Bullet objects are aligned and keep their addresses as blocks 
     }
     for (int i = 0; i < 20; ++i)
         CHECK(bodies[static_cast<std::size_t>(i)]->getCenterOfMassPosition().x() == btScalar(i));
+    struct alignas(64) Wide {
+        double lanes[8];
+    };
+    for (int i = 0; i < 5; ++i) {
+        arena.make<char>('y');
+        CHECK(reinterpret_cast<std::uintptr_t>(arena.make<Wide>()) % 64 == 0); // more than the blocks' 16
+    }
     btPoint2PointConstraint* c =
         arena.make<btPoint2PointConstraint>(*bodies[0], *bodies[1], btVector3(0, 0, 0), btVector3(1, 0, 0));
     CHECK(aligned16(c));
