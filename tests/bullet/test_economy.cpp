@@ -335,6 +335,19 @@ TEST_CASE("economy: a sunk ragdoll wakes whole on an impulse and is removed clea
     const std::vector<figure::Transform> before = r.bodyTransforms();
     for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
     REQUIRE(r.sunk());
+    // The world holds the ground and the sunk ragdoll's box, which names its ragdoll but is none of its bodies.
+    int boxes = 0;
+    for (int k = 0; k < scene.world().getNumCollisionObjects(); ++k) {
+        const btCollisionObject* object = scene.world().getCollisionObjectArray()[k];
+        if (object == scene.ground()) {
+            CHECK(scene.ragdollWorld().ragdollOf(object) == nullptr);
+            continue;
+        }
+        ++boxes;
+        CHECK(scene.ragdollWorld().ragdollOf(object) == &r);
+        CHECK(r.figureBodyOf(*object, object->getWorldTransform().getOrigin()) == -1);
+    }
+    CHECK(boxes == 1);
     const std::vector<figure::Transform> after = r.bodyTransforms();
     for (std::size_t i = 0; i < before.size(); ++i) CHECK(after[i].position == before[i].position);
     const int body = r.rigidBodyCount() / 2;
