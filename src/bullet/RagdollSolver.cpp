@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -13,6 +14,7 @@
 #include <Eigen/Dense>
 
 #include "BlockTree.h"
+#include "RowKernels.h"
 
 namespace afb::bullet {
 
@@ -623,11 +625,8 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
     auto& pool = m_tmpSolverNonContactConstraintPool;
     double residual = 0;
     auto relVel = [&](const btSolverConstraint& c) {
-        const btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
-        const btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
-        return double(
-            c.m_contactNormal1.dot(a.m_deltaLinearVelocity) + c.m_relpos1CrossNormal.dot(a.m_deltaAngularVelocity) +
-            c.m_contactNormal2.dot(b.m_deltaLinearVelocity) + c.m_relpos2CrossNormal.dot(b.m_deltaAngularVelocity));
+        return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(m_tmpSolverBodyPool[c.m_solverBodyIdA],
+                                                                          m_tmpSolverBodyPool[c.m_solverBodyIdB], c));
     };
     // The joints of every group, exactly.
     for (Direct::Group& group : d.live()) {
@@ -703,11 +702,11 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
             if (g < 0) {
                 btSolverBody& b = m_tmpSolverBodyPool[id];
                 if (s == 0)
-                    b.internalApplyImpulse(c.m_contactNormal1 * b.internalGetInvMass(), c.m_angularComponentA,
-                                           btScalar(dl));
+                    detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal1, c.m_angularComponentA,
+                                                                         btScalar(dl));
                 else
-                    b.internalApplyImpulse(c.m_contactNormal2 * b.internalGetInvMass(), c.m_angularComponentB,
-                                           btScalar(dl));
+                    detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal2, c.m_angularComponentB,
+                                                                         btScalar(dl));
                 continue;
             }
             if (fr.response[s] < 0) continue; // covered by side A's response
@@ -759,11 +758,9 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
         for (Direct::FreeRow& fr : d.contact) {
             btSolverConstraint& c = *fr.c;
             if ((!fr.pending && fr.invEffectiveMass == 0) || c.m_rhsPenetration == 0) continue;
-            const btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
-            const btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
             const double rel =
-                double(c.m_contactNormal1.dot(a.m_pushVelocity) + c.m_relpos1CrossNormal.dot(a.m_turnVelocity) +
-                       c.m_contactNormal2.dot(b.m_pushVelocity) + c.m_relpos2CrossNormal.dot(b.m_turnVelocity));
+                double(detail::rowVelocitySum<detail::RowTarget::Push>(m_tmpSolverBodyPool[c.m_solverBodyIdA],
+                                                                       m_tmpSolverBodyPool[c.m_solverBodyIdB], c));
             const double target = (double(c.m_rhsPenetration) - double(c.m_cfm) * double(c.m_appliedPushImpulse)) /
                                   double(c.m_jacDiagABInv);
             const double toGo = target - rel;
@@ -787,11 +784,11 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
                 if (g < 0) {
                     btSolverBody& body = m_tmpSolverBodyPool[id];
                     if (s == 0)
-                        body.internalApplyPushImpulse(c.m_contactNormal1 * body.internalGetInvMass(),
-                                                      c.m_angularComponentA, btScalar(dl));
+                        detail::applyRowImpulse<detail::RowTarget::Push>(body, c.m_contactNormal1,
+                                                                         c.m_angularComponentA, btScalar(dl));
                     else
-                        body.internalApplyPushImpulse(c.m_contactNormal2 * body.internalGetInvMass(),
-                                                      c.m_angularComponentB, btScalar(dl));
+                        detail::applyRowImpulse<detail::RowTarget::Push>(body, c.m_contactNormal2,
+                                                                         c.m_angularComponentB, btScalar(dl));
                     continue;
                 }
                 if (fr.response[s] < 0) continue;
@@ -814,6 +811,15 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
                                                           btTypedConstraint** constraints, int numConstraints,
                                                           const btContactSolverInfo& infoGlobal,
                                                           btIDebugDraw* debugDrawer) {
+    // Bullet's setup chose its row functions for the solver mode (its scalar reference in Debian's build); with
+    // SIMD rows, ours replace them for this solve (the iterations, split impulse included, call them).
+    if (m_simdRows) {
+        m_resolveSingleConstraintRowGeneric = detail::resolveRowGeneric;
+        m_resolveSingleConstraintRowLowerLimit = detail::resolveRowLowerLimit;
+        m_resolveSplitPenetrationImpulse = detail::resolveRowSplitPenetration;
+    } else if (m_resolveSingleConstraintRowGeneric == detail::resolveRowGeneric) {
+        setupSolverFunctions((infoGlobal.m_solverMode & SOLVER_SIMD) != 0); // what Bullet's setup installs
+    }
     if (!m_direct->enabled || m_rows.size() == 0 || !buildDirect())
         return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(bodies, numBodies, manifoldPtr,
                                                                                       numManifolds, constraints,
@@ -846,6 +852,77 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
 }
 
 RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
+
+// Bullet's solveSingleIteration (3.24) with the row update inlined: the same rows in the same order, the same
+// residual, Bullet's calls to the constraints' obsolete solve kept; only the order randomisation is left to Bullet.
+btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** bodies, int numBodies,
+                                             btPersistentManifold** manifoldPtr, int numManifolds,
+                                             btTypedConstraint** constraints, int numConstraints,
+                                             const btContactSolverInfo& infoGlobal, btIDebugDraw* debugDrawer) {
+    if (!m_simdRows || (infoGlobal.m_solverMode & SOLVER_RANDMIZE_ORDER) != 0)
+        return btSequentialImpulseConstraintSolver::solveSingleIteration(iteration, bodies, numBodies, manifoldPtr,
+                                                                         numManifolds, constraints, numConstraints,
+                                                                         infoGlobal, debugDrawer);
+    using detail::resolveRow;
+    using detail::RowTarget;
+    btScalar residual = 0;
+    auto keep = [&residual](btScalar r) { residual = btMax(residual, r * r); };
+    auto solve = [this, &keep](const btSolverConstraint& c, auto upper) {
+        keep(resolveRow<decltype(upper)::value, RowTarget::Velocity>(m_tmpSolverBodyPool[c.m_solverBodyIdA],
+                                                                     m_tmpSolverBodyPool[c.m_solverBodyIdB], c));
+    };
+    using Generic = std::true_type;
+    using LowerLimit = std::false_type;
+    for (int j = 0; j < m_tmpSolverNonContactConstraintPool.size(); ++j) {
+        const btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[m_orderNonContactConstraintPool[j]];
+        if (iteration < c.m_overrideNumSolverIterations) solve(c, Generic{});
+    }
+    if (iteration >= infoGlobal.m_numIterations) return residual;
+    for (int j = 0; j < numConstraints; ++j) {
+        if (!constraints[j]->isEnabled()) continue;
+        const int a = getOrInitSolverBody(constraints[j]->getRigidBodyA(), infoGlobal.m_timeStep);
+        const int b = getOrInitSolverBody(constraints[j]->getRigidBodyB(), infoGlobal.m_timeStep);
+        constraints[j]->solveConstraintObsolete(m_tmpSolverBodyPool[a], m_tmpSolverBodyPool[b], infoGlobal.m_timeStep);
+    }
+    auto friction = [&](btSolverConstraint& f, btScalar total) {
+        if (!(total > btScalar(0))) return; // as Bullet's test (a NaN total solves nothing)
+        f.m_lowerLimit = -(f.m_friction * total);
+        f.m_upperLimit = f.m_friction * total;
+        solve(f, Generic{});
+    };
+    const int contacts = m_tmpSolverContactConstraintPool.size();
+    if (infoGlobal.m_solverMode & SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS) {
+        const bool two = (infoGlobal.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS) != 0;
+        const int multiplier = two ? 2 : 1;
+        for (int j = 0; j < contacts; ++j) {
+            const btSolverConstraint& c = m_tmpSolverContactConstraintPool[m_orderTmpConstraintPool[j]];
+            solve(c, LowerLimit{});
+            const btScalar total = c.m_appliedImpulse;
+            friction(m_tmpSolverContactFrictionConstraintPool[m_orderFrictionConstraintPool[j * multiplier]], total);
+            if (two)
+                friction(m_tmpSolverContactFrictionConstraintPool[m_orderFrictionConstraintPool[j * multiplier + 1]],
+                         total);
+        }
+    } else {
+        for (int j = 0; j < contacts; ++j)
+            solve(m_tmpSolverContactConstraintPool[m_orderTmpConstraintPool[j]], LowerLimit{});
+        for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j) {
+            btSolverConstraint& f = m_tmpSolverContactFrictionConstraintPool[m_orderFrictionConstraintPool[j]];
+            friction(f, m_tmpSolverContactConstraintPool[f.m_frictionIndex].m_appliedImpulse);
+        }
+    }
+    for (int j = 0; j < m_tmpSolverContactRollingFrictionConstraintPool.size(); ++j) {
+        btSolverConstraint& r = m_tmpSolverContactRollingFrictionConstraintPool[j];
+        const btScalar total = m_tmpSolverContactConstraintPool[r.m_frictionIndex].m_appliedImpulse;
+        if (!(total > btScalar(0))) continue;
+        btScalar magnitude = r.m_friction * total;
+        if (magnitude > r.m_friction) magnitude = r.m_friction;
+        r.m_lowerLimit = -magnitude;
+        r.m_upperLimit = magnitude;
+        solve(r, Generic{});
+    }
+    return residual;
+}
 RagdollSolver::~RagdollSolver() = default;
 
 void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct) {

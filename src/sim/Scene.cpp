@@ -11,6 +11,10 @@ Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
     bullet::WorldParts parts = bullet::makeWorld(method, *m_dispatcher, *m_broadphase, *m_config);
     m_solver = std::move(parts.solver);
     m_world = std::move(parts.world);
+    // Plain Bullet runs Bullet's own scalar row update (Debian's build has no SSE solver on Linux); afbullet's
+    // methods run the SSE one, which rounds bit for bit the same (RowKernels.h).
+    if (auto* solver = dynamic_cast<bullet::RagdollSolver*>(m_solver.get()); solver && isRaw(method))
+        solver->setSimdRows(false);
     m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));
     // Bullet recomputes every object's bounding box every step by default, sleeping and static ones too; nothing
     // here moves a static or sleeping object without waking it, so only active objects are updated (what a resting

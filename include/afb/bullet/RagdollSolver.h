@@ -47,6 +47,12 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// The largest impulse (N·s) a contact point of `manifold` may start a step of `dt` seconds from (warm start),
     /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
     /// sets it from Method::selfContactCap.
+    /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
+    /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, or that
+    /// scalar reference itself (off; what `raw`, plain Bullet, runs).
+    void setSimdRows(bool on) { m_simdRows = on; }
+    bool simdRows() const { return m_simdRows; }
+
     using ContactWarmStartCap = std::function<btScalar(const btPersistentManifold& manifold, btScalar dt)>;
     void setContactWarmStartCap(ContactWarmStartCap cap) { m_contactCap = std::move(cap); }
     const ContactWarmStartCap& contactWarmStartCap() const { return m_contactCap; }
@@ -58,6 +64,10 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
                        const btContactSolverInfo& infoGlobal) override;
     btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                            const btContactSolverInfo& infoGlobal) override;
+    btScalar solveSingleIteration(int iteration, btCollisionObject** bodies, int numBodies,
+                                  btPersistentManifold** manifoldPtr, int numManifolds, btTypedConstraint** constraints,
+                                  int numConstraints, const btContactSolverInfo& infoGlobal,
+                                  btIDebugDraw* debugDrawer) override;
     btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
                                                btPersistentManifold** manifoldPtr, int numManifolds,
                                                btTypedConstraint** constraints, int numConstraints,
@@ -66,6 +76,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
 
   private:
     ContactWarmStartCap m_contactCap;
+    bool m_simdRows = true;
     /// A tracked constraint: its rows' last impulses, inline (a constraint has at most 12 rows: six axes, each
     /// with a limit and a motor; one with more is not warm-started).
     struct Tracked {
