@@ -12,9 +12,9 @@
 //                      LOD 6 (Ragdoll::setLod) and back (setFullDetail), timed apart
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
 // solve contacts and joints with 20), default, iterative (the default until session 15: default with
-// direct-joints off, position-tree 0, friction-directions 1), fast. After the runs, a table
-// of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction counts, exact
-// from run to run, come from cmake/callgrind-cost.sh.
+// direct-joints off, position-tree 0, friction-directions 1), fast; BM_Drop also `floor` (floorMethod()). After the
+// runs, a table of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction
+// counts, exact from run to run, come from cmake/callgrind-cost.sh.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -70,6 +70,18 @@ std::vector<Labelled> methods() {
             {"default", *afb::bullet::methodPreset("default")},
             {"iterative", *afb::bullet::methodPreset("iterative")},
             {"fast", *afb::bullet::methodPreset("fast")}};
+}
+
+/// The floor under any method on Bullet's solver (README: Economy): `fast` without the position pass, speculative
+/// limits and contacts and full manifolds, i.e. Bullet's 20 iterations over the merged figure, on afbullet's
+/// solver (warm-started joints, SSE row updates). Dropped only (BM_Drop/floor): a measure of the solver, not a
+/// method anyone would choose for accuracy.
+Method floorMethod() {
+    Method m = *afb::bullet::methodPreset("fast");
+    m.name = "floor";
+    m.positionIterations = 0;
+    m.speculativeLimits = m.multipointContacts = m.speculativeContacts = false;
+    return m;
 }
 
 /// `count` humanoids on a grid, 37° apart in yaw, the lowest point `heightM` above the ground.
@@ -297,6 +309,9 @@ void registerAll() {
             ->Unit(benchmark::kMillisecond)
             ->Iterations(1);
     }
+    benchmark::RegisterBenchmark("BM_Drop/floor", dropBenchmark, floorMethod(), "floor")
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(1);
     for (const Labelled& m : methods())
         benchmark::RegisterBenchmark((std::string("BM_Rest/") + m.label).c_str(), restBenchmark, m.method, m.label)
             ->Unit(benchmark::kMillisecond)
@@ -335,9 +350,11 @@ void printRatios() {
         for (const auto& [label, value] : byLabel)
             std::printf("  %-20s %8.3f  %5.2fx raw\n", label.c_str(), value, value / raw->second);
         const auto equal = byLabel.find("raw:iterations=20");
-        const auto preset = byLabel.find("default");
-        if (equal != byLabel.end() && preset != byLabel.end() && equal->second > 0)
-            std::printf("  default / raw:iterations=20 (equal iterations): %.2fx\n", preset->second / equal->second);
+        if (equal != byLabel.end() && equal->second > 0)
+            for (const char* label : {"default", "fast", "floor"})
+                if (const auto it = byLabel.find(label); it != byLabel.end())
+                    std::printf("  %s / raw:iterations=20 (equal iterations): %.2fx\n", label,
+                                it->second / equal->second);
     }
 }
 

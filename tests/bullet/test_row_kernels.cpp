@@ -51,6 +51,10 @@ struct Rng {
 };
 
 void randomBody(Rng& rng, btSolverBody& b, btRigidBody* original) {
+    // Every member set (btTransform and btVector3 leave theirs uninitialised): the copies compared are whole.
+    b.m_worldTransform.setIdentity();
+    b.m_linearVelocity = b.m_angularVelocity = btVector3(0, 0, 0);
+    b.m_externalForceImpulse = b.m_externalTorqueImpulse = btVector3(0, 0, 0);
     b.m_deltaLinearVelocity = rng.vector(3);
     b.m_deltaAngularVelocity = rng.vector(5);
     b.m_pushVelocity = rng.vector(0.5f);
@@ -64,6 +68,9 @@ void randomBody(Rng& rng, btSolverBody& b, btRigidBody* original) {
 }
 
 void randomRow(Rng& rng, btSolverConstraint& c) {
+    c.m_friction = 0;
+    c.m_originalContactPoint = nullptr;
+    c.m_overrideNumSolverIterations = c.m_frictionIndex = c.m_solverBodyIdA = c.m_solverBodyIdB = 0;
     c.m_contactNormal1 = rng.vector(1);
     c.m_contactNormal2 = -c.m_contactNormal1 * rng.uniform(0.5f, 1.5f);
     c.m_relpos1CrossNormal = rng.vector(0.5f);
