@@ -853,6 +853,8 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
 
 RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
 
+RagdollSolver::~RagdollSolver() = default;
+
 // Bullet's solveSingleIteration (3.24) with the row update inlined: the same rows in the same order, the same
 // residual, Bullet's calls to the constraints' obsolete solve kept; only the order randomisation is left to Bullet.
 btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** bodies, int numBodies,
@@ -923,7 +925,6 @@ btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** 
     }
     return residual;
 }
-RagdollSolver::~RagdollSolver() = default;
 
 void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct) {
     const btHashPtr key(&constraint);

@@ -44,15 +44,15 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     void setDirectJoints(bool on);
     bool directJoints() const;
 
-    /// The largest impulse (N·s) a contact point of `manifold` may start a step of `dt` seconds from (warm start),
-    /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
-    /// sets it from Method::selfContactCap.
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
     /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, or that
     /// scalar reference itself (off; what `raw`, plain Bullet, runs).
     void setSimdRows(bool on) { m_simdRows = on; }
     bool simdRows() const { return m_simdRows; }
 
+    /// The largest impulse (N·s) a contact point of `manifold` may start a step of `dt` seconds from (warm start),
+    /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
+    /// sets it from Method::selfContactCap.
     using ContactWarmStartCap = std::function<btScalar(const btPersistentManifold& manifold, btScalar dt)>;
     void setContactWarmStartCap(ContactWarmStartCap cap) { m_contactCap = std::move(cap); }
     const ContactWarmStartCap& contactWarmStartCap() const { return m_contactCap; }
