@@ -7,6 +7,7 @@
 #include <bit>
 #include <cstdint>
 #include <random>
+#include <string>
 
 #include <btBulletDynamicsCommon.h>
 
@@ -141,8 +142,23 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
     const auto loaded = test::loadEntity("humanoid");
     const auto asset = bullet::RagdollAsset::create(loaded.figure);
     // `fast` solves its joints, limits and contacts in Bullet's iterations; `default` solves only its free rows
-    // there when its direct solve declines an island, so `fast` is the method that exercises every row kind.
-    for (const char* name : {"fast", "legacy"}) {
+    // there when its direct solve declines an island, so `fast` is the method that exercises every row kind. The
+    // solver modes that change Bullet's loop (contacts interleaved with their friction, two friction directions,
+    // the order randomised, which RagdollSolver leaves to Bullet's own loop) each get a run.
+    struct Variant {
+        const char* method;
+        int solverMode; // added to the method's
+    };
+    const Variant variants[] = {
+        {"fast", 0},
+        {"legacy", 0},
+        {"fast", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS},
+        {"fast", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS | SOLVER_USE_2_FRICTION_DIRECTIONS},
+        {"fast", SOLVER_RANDMIZE_ORDER},
+    };
+    std::vector<figure::Transform> plainFast; // `fast`'s final pose in its own solver mode
+    for (const Variant& variant : variants) {
+        const char* name = variant.method;
         std::vector<std::vector<figure::Transform>> finals;
         std::vector<figure::Transform> spawned;
         for (const bool simd : {true, false}) {
@@ -156,11 +172,12 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
                 btTransform(btQuaternion(btVector3(0, 0, 1), 0.6f) * btQuaternion(btVector3(1, 0, 0), 0.5f),
                             btVector3(0, 0, 1.5f));
             bullet::Ragdoll& r = scene.spawn(asset, o);
+            scene.world().getSolverInfo().m_solverMode |= variant.solverMode;
             if (simd) spawned = r.bodyTransforms();
             for (int s = 0; s < 120; ++s) scene.step(1.0 / 60);
             finals.push_back(r.bodyTransforms());
         }
-        INFO(name);
+        INFO(name << ", solver mode +" << variant.solverMode);
         REQUIRE(finals[0].size() == finals[1].size());
         bool moved = false;
         for (std::size_t i = 0; i < finals[0].size(); ++i) {
@@ -169,5 +186,12 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
             moved = moved || (finals[0][i].position - spawned[i].position).norm() > 0.5;
         }
         CHECK(moved); // it fell and landed: contacts, limits and friction were solved
+        if (std::string(name) == "fast" && variant.solverMode == 0) plainFast = finals[0];
+        if (variant.solverMode != 0) { // the mode took effect: Bullet's loop ran differently
+            bool differs = false;
+            for (std::size_t i = 0; i < finals[0].size(); ++i)
+                differs = differs || finals[0][i].position != plainFast[i].position;
+            CHECK(differs);
+        }
     }
 }
