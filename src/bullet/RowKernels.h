@@ -123,8 +123,8 @@ inline btScalar rowVelocitySum(const btSolverBody& a, const btSolverBody& b, con
 
 /// One row update as Bullet's scalar reference does it: bounded on both sides (`Upper`, the generic row) or below
 /// only (contacts); on the velocities or, for split impulse, the push velocities (a row with no penetration to
-/// recover is skipped then, as Bullet skips it). Returns what Bullet's returns: the impulse change over the
-/// row's effective mass, in double precision rounded to btScalar.
+/// recover is skipped then, as Bullet skips it). Returns what Bullet's returns, the solver's residual term: the
+/// impulse change divided by the row's jacDiagABInv (a velocity), in double precision rounded to btScalar.
 template <bool Upper, RowTarget T>
 inline btScalar resolveRow(btSolverBody& a, btSolverBody& b, const btSolverConstraint& c) {
     btScalar deltaImpulse = 0;
