@@ -26,6 +26,18 @@ namespace afb::bullet::detail {
 /// impulse's (push and turn velocities).
 enum class RowTarget { Velocity, Push };
 
+/// A body's linear and angular velocity of that pair.
+template <RowTarget T, class Body>
+auto& linearOf(Body& body) {
+    if constexpr (T == RowTarget::Velocity) return body.m_deltaLinearVelocity;
+    else return body.m_pushVelocity;
+}
+template <RowTarget T, class Body>
+auto& angularOf(Body& body) {
+    if constexpr (T == RowTarget::Velocity) return body.m_deltaAngularVelocity;
+    else return body.m_turnVelocity;
+}
+
 #if AFB_SIMD_ROWS
 
 inline __m128 loadVector(const btVector3& v) { return _mm_loadu_ps(v.m_floats); } // 8-aligned in Debian's build
@@ -45,13 +57,8 @@ inline void applyRowImpulse(btSolverBody& body, const btVector3& normal, const b
     const __m128 linear = _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(loadVector(normal), loadVector(body.m_invMass)), s),
                                      loadVector(body.m_linearFactor));
     const __m128 turn = _mm_mul_ps(loadVector(angular), _mm_mul_ps(loadVector(body.m_angularFactor), s));
-    if constexpr (T == RowTarget::Velocity) {
-        addXyz(body.m_deltaLinearVelocity, linear);
-        addXyz(body.m_deltaAngularVelocity, turn);
-    } else {
-        addXyz(body.m_pushVelocity, linear);
-        addXyz(body.m_turnVelocity, turn);
-    }
+    addXyz(linearOf<T>(body), linear);
+    addXyz(angularOf<T>(body), turn);
 }
 
 /// The row's four dot products in lanes 0–3: n₁ · v_A, (r₁ × n) · ω_A, n₂ · v_B, (r₂ × n) · ω_B over the bodies'
@@ -59,10 +66,7 @@ inline void applyRowImpulse(btSolverBody& body, const btVector3& normal, const b
 /// that each lane sums its own).
 template <RowTarget T>
 inline __m128 rowDots(const btSolverBody& a, const btSolverBody& b, const btSolverConstraint& c) {
-    const btVector3& va = T == RowTarget::Velocity ? a.m_deltaLinearVelocity : a.m_pushVelocity;
-    const btVector3& wa = T == RowTarget::Velocity ? a.m_deltaAngularVelocity : a.m_turnVelocity;
-    const btVector3& vb = T == RowTarget::Velocity ? b.m_deltaLinearVelocity : b.m_pushVelocity;
-    const btVector3& wb = T == RowTarget::Velocity ? b.m_deltaAngularVelocity : b.m_turnVelocity;
+    const btVector3 &va = linearOf<T>(a), &wa = angularOf<T>(a), &vb = linearOf<T>(b), &wb = angularOf<T>(b);
     __m128 x = _mm_mul_ps(loadVector(c.m_contactNormal1), loadVector(va));
     __m128 y = _mm_mul_ps(loadVector(c.m_relpos1CrossNormal), loadVector(wa));
     __m128 z = _mm_mul_ps(loadVector(c.m_contactNormal2), loadVector(vb));
@@ -101,20 +105,14 @@ inline void applyRowImpulse(btSolverBody& body, const btVector3& normal, const b
 template <RowTarget T>
 inline void rowVelocities(const btSolverBody& a, const btSolverBody& b, const btSolverConstraint& c, btScalar& sideA,
                           btScalar& sideB) {
-    const btVector3& va = T == RowTarget::Velocity ? a.m_deltaLinearVelocity : a.m_pushVelocity;
-    const btVector3& wa = T == RowTarget::Velocity ? a.m_deltaAngularVelocity : a.m_turnVelocity;
-    const btVector3& vb = T == RowTarget::Velocity ? b.m_deltaLinearVelocity : b.m_pushVelocity;
-    const btVector3& wb = T == RowTarget::Velocity ? b.m_deltaAngularVelocity : b.m_turnVelocity;
+    const btVector3 &va = linearOf<T>(a), &wa = angularOf<T>(a), &vb = linearOf<T>(b), &wb = angularOf<T>(b);
     sideA = c.m_contactNormal1.dot(va) + c.m_relpos1CrossNormal.dot(wa);
     sideB = c.m_contactNormal2.dot(vb) + c.m_relpos2CrossNormal.dot(wb);
 }
 
 template <RowTarget T>
 inline btScalar rowVelocitySum(const btSolverBody& a, const btSolverBody& b, const btSolverConstraint& c) {
-    const btVector3& va = T == RowTarget::Velocity ? a.m_deltaLinearVelocity : a.m_pushVelocity;
-    const btVector3& wa = T == RowTarget::Velocity ? a.m_deltaAngularVelocity : a.m_turnVelocity;
-    const btVector3& vb = T == RowTarget::Velocity ? b.m_deltaLinearVelocity : b.m_pushVelocity;
-    const btVector3& wb = T == RowTarget::Velocity ? b.m_deltaAngularVelocity : b.m_turnVelocity;
+    const btVector3 &va = linearOf<T>(a), &wa = angularOf<T>(a), &vb = linearOf<T>(b), &wb = angularOf<T>(b);
     return c.m_contactNormal1.dot(va) + c.m_relpos1CrossNormal.dot(wa) + c.m_contactNormal2.dot(vb) +
            c.m_relpos2CrossNormal.dot(wb);
 }
