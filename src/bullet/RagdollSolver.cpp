@@ -84,6 +84,7 @@ struct RagdollSolver::Direct {
         bool useTree = false;
         std::vector<int> rowAt;
         Vec cfm;           // C's diagonal
+        Vec target;        // each row's rhs / jacDiagABInv: the velocity it asks for (fixed for the solve)
         Vec lambda;        // the rows' accumulated impulses (without the reactions to free rows unless `soft`)
         bool soft = false; // a row has a cfm: its reactions are kept up to date (the block solve needs them)
         // The tree's layout, kept from step to step while the rows join the same body pairs in the same order
@@ -379,6 +380,7 @@ bool RagdollSolver::buildDirect() {
     for (Direct::Group& group : d.live()) {
         const int n = static_cast<int>(group.rows.size());
         group.cfm.resize(n);
+        group.target.resize(n);
         double largest = 0;
         for (int i = 0; i < n; ++i) {
             const Direct::JointRow& row = group.rows[static_cast<std::size_t>(i)];
@@ -386,6 +388,7 @@ bool RagdollSolver::buildDirect() {
             largest = std::max(largest,
                                (row.bodyA >= 0 ? dot(row.a, row.a) : 0.0) + (row.bodyB >= 0 ? dot(row.b, row.b) : 0.0));
             group.cfm(i) = double(c.m_cfm) / double(c.m_jacDiagABInv);
+            group.target(i) = double(c.m_rhs) / double(c.m_jacDiagABInv);
             group.soft = group.soft || group.cfm(i) != 0;
         }
         // A joint loop makes A singular; a relative regularisation keeps the factor finite.
@@ -633,11 +636,13 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
         const Eigen::Index n = static_cast<Eigen::Index>(group.rows.size());
         d.e.resize(static_cast<std::size_t>(n));
         Eigen::Map<Vec> e(d.e.data(), n);
+        double largest = residual; // kept in a register over the rows
         for (Eigen::Index i = 0; i < n; ++i) {
             const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
-            e(i) = double(c.m_rhs) / double(c.m_jacDiagABInv) - group.cfm(i) * group.lambda(i) - relVel(c);
-            residual = std::max(residual, e(i) * e(i));
+            e(i) = group.target(i) - group.cfm(i) * group.lambda(i) - relVel(c);
+            largest = std::max(largest, e(i) * e(i));
         }
+        residual = largest;
         if (group.useTree) {
             // H [Δv; Δλ] = [0; −e]: the bodies' velocity changes come out with the impulses.
             d.scratch.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
@@ -676,26 +681,26 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
     }
     // One free row: Bullet's update with the effective mass and the response of the whole group.
     btSolverBody* const bodies = &m_tmpSolverBodyPool[0];
-    auto resolve = [&](Direct::FreeRow& fr) {
+    // Returns the row's residual term, dl² / invEffectiveMass² (0: no change); the caller keeps the largest.
+    auto resolve = [&](Direct::FreeRow& fr) -> double {
         btSolverConstraint& c = *fr.c;
-        if (!fr.pending && fr.invEffectiveMass == 0) return;
+        if (!fr.pending && fr.invEffectiveMass == 0) return 0;
         const double target =
             (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
         const double toGo = target - relVel(c);
         if (fr.pending) {
             if (Direct::heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit),
                                         double(c.m_upperLimit)))
-                return;
+                return 0;
             d.complete(fr, m_tmpSolverBodyPool);
-            if (fr.invEffectiveMass == 0) return;
+            if (fr.invEffectiveMass == 0) return 0;
         }
         double dl = toGo * fr.invEffectiveMass;
         const double sum = double(c.m_appliedImpulse) + dl;
         if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
         else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
-        if (dl == 0) return;
+        if (dl == 0) return 0;
         c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
-        residual = std::max(residual, dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass));
         for (int s = 0; s < 2; ++s) {
             const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
             const int g = fr.group[s];
@@ -724,17 +729,18 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
                 for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
             }
         }
+        return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
     };
     for (Direct::FreeRow& fr : d.nonContact)
-        if (iteration < fr.c->m_overrideNumSolverIterations) resolve(fr);
+        if (iteration < fr.c->m_overrideNumSolverIterations) residual = std::max(residual, resolve(fr));
     if (iteration < infoGlobal.m_numIterations) {
-        for (Direct::FreeRow& fr : d.contact) resolve(fr);
+        for (Direct::FreeRow& fr : d.contact) residual = std::max(residual, resolve(fr));
         for (Direct::FreeRow& fr : d.friction) {
             const btScalar total = m_tmpSolverContactConstraintPool[fr.c->m_frictionIndex].m_appliedImpulse;
             if (total <= 0) continue;
             fr.c->m_lowerLimit = -(fr.c->m_friction * total);
             fr.c->m_upperLimit = fr.c->m_friction * total;
-            resolve(fr);
+            residual = std::max(residual, resolve(fr));
         }
         for (int j = 0; j < m_tmpSolverContactRollingFrictionConstraintPool.size(); ++j) {
             btSolverConstraint& c = m_tmpSolverContactRollingFrictionConstraintPool[j];

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
+#include <cstdint>
 #include <mutex>
 
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
@@ -413,12 +415,55 @@ RagdollWorld::~RagdollWorld() {
     m_world.removeAction(m_action.get());
 }
 
-const RagdollWorld::BodyOwner* RagdollWorld::ownerOf(const btCollisionObject* o) const {
-    const auto it =
-        std::lower_bound(m_owners.begin(), m_owners.end(), o, [](const BodyOwner& e, const btCollisionObject* key) {
-            return std::less<const btCollisionObject*>()(e.body, key);
-        });
-    return it != m_owners.end() && it->body == o ? &*it : nullptr;
+std::size_t RagdollWorld::OwnerTable::slotOf(const btCollisionObject* body) const {
+    // Fibonacci hashing of the address (its low bits are the allocator's alignment).
+    const auto key = static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(body) >> 4);
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> m_shift);
+}
+
+const RagdollWorld::BodyOwner* RagdollWorld::OwnerTable::find(const btCollisionObject* body) const {
+    if (m_count == 0) return nullptr;
+    const std::size_t mask = m_slots.size() - 1;
+    for (std::size_t i = slotOf(body);; i = (i + 1) & mask) {
+        const BodyOwner& s = m_slots[i];
+        if (s.body == body) return &s;
+        if (s.body == nullptr) return nullptr;
+    }
+}
+
+void RagdollWorld::OwnerTable::insert(const BodyOwner& owner) {
+    if (2 * (m_count + 1) > m_slots.size()) grow();
+    const std::size_t mask = m_slots.size() - 1;
+    for (std::size_t i = slotOf(owner.body);; i = (i + 1) & mask) {
+        BodyOwner& s = m_slots[i];
+        if (s.body == owner.body) return;
+        if (s.body == nullptr) {
+            s = owner;
+            ++m_count;
+            return;
+        }
+    }
+}
+
+void RagdollWorld::OwnerTable::grow() {
+    std::vector<BodyOwner> old(std::max<std::size_t>(16, 2 * m_slots.size()), BodyOwner{nullptr, -1, 0});
+    old.swap(m_slots);
+    m_shift = 64 - std::countr_zero(m_slots.size());
+    m_count = 0;
+    for (const BodyOwner& o : old)
+        if (o.body != nullptr) insert(o);
+}
+
+void RagdollWorld::OwnerTable::removeRagdoll(int index, bool renumber) {
+    // Rebuilt in its slots: a removal is as rare as a spawn, and linear in the world's ragdoll bodies as before.
+    std::vector<BodyOwner> kept;
+    kept.reserve(m_count);
+    for (const BodyOwner& o : m_slots)
+        if (o.body != nullptr && o.ragdoll != index)
+            kept.push_back({o.body, renumber && o.ragdoll > index ? o.ragdoll - 1 : o.ragdoll, o.boundingRadius});
+    std::fill(m_slots.begin(), m_slots.end(), BodyOwner{nullptr, -1, 0});
+    m_count = 0;
+    for (const BodyOwner& o : kept) insert(o);
 }
 
 // Linear speed plus angular speed times the shape's bounding radius, with a 25 % allowance for the acceleration
@@ -472,9 +517,7 @@ void RagdollWorld::detachBodies(Ragdoll& r) {
     const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
     if (it == m_ragdolls.end()) return;
     const int index = static_cast<int>(it - m_ragdolls.begin());
-    m_owners.erase(std::remove_if(m_owners.begin(), m_owners.end(),
-                                  [&](const BodyOwner& o) { return o.ragdoll == index; }),
-                   m_owners.end());
+    m_owners.removeRagdoll(index, false);
 }
 
 void RagdollWorld::attachBodies(Ragdoll& r) {
@@ -514,40 +557,24 @@ void RagdollWorld::detach(Ragdoll& r) {
     const int gone = static_cast<int>(it - m_ragdolls.begin());
     m_ragdolls.erase(it);
     // Its bodies leave the owner table, later ragdolls move down one place: no re-sort, no shape queries.
-    m_owners.erase(std::remove_if(m_owners.begin(), m_owners.end(),
-                                  [&](const BodyOwner& o) { return o.ragdoll == gone; }),
-                   m_owners.end());
-    for (BodyOwner& o : m_owners)
-        if (o.ragdoll > gone) --o.ragdoll;
+    m_owners.removeRagdoll(gone, true);
 }
 
-// The ragdoll's collision objects (one per rigid body: merged bodies share one) join the sorted owner table: sorted
-// among themselves and merged in, so a spawn costs its own bodies, not the world's.
+// The ragdoll's collision objects (one per rigid body: merged bodies share one) join the owner table.
 void RagdollWorld::addOwners(Ragdoll& r, int index) {
-    const auto byBody = [](const BodyOwner& x, const BodyOwner& y) {
-        return std::less<const btCollisionObject*>()(x.body, y.body);
-    };
-    const std::size_t before = m_owners.size();
     if (r.backend() == Backend::Rigid) {
         for (int k = 0; k < r.rigidBodyCount(); ++k) // radii from the asset
-            m_owners.push_back({&r.rigidBody(k), index,
-                                static_cast<btScalar>(r.layout().rigids[static_cast<std::size_t>(k)].boundingRadius)});
+            m_owners.insert({&r.rigidBody(k), index,
+                             static_cast<btScalar>(r.layout().rigids[static_cast<std::size_t>(k)].boundingRadius)});
     } else {
         for (int i = 0; i < r.bodyCount(); ++i) {
             const btCollisionObject& body = r.collisionObject(i);
             btVector3 centre;
             btScalar radius = 0;
             body.getCollisionShape()->getBoundingSphere(centre, radius);
-            m_owners.push_back({&body, index, radius});
+            m_owners.insert({&body, index, radius});
         }
     }
-    const auto mid = m_owners.begin() + static_cast<std::ptrdiff_t>(before);
-    std::sort(mid, m_owners.end(), byBody);
-    m_owners.erase(std::unique(mid, m_owners.end(),
-                               [](const BodyOwner& x, const BodyOwner& y) { return x.body == y.body; }),
-                   m_owners.end());
-    std::inplace_merge(m_owners.begin(), m_owners.begin() + static_cast<std::ptrdiff_t>(before), m_owners.end(),
-                       byBody);
 }
 
 } // namespace afb::bullet

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "EntityFixture.h"
 #include "FigureFixture.h"
 #include "TestSupport.h"
 #include "afb/bullet/Convert.h"
@@ -22,6 +23,7 @@
 #include "afb/decl/Library.h"
 #include "afb/figure/Collision.h"
 #include "afb/figure/Load.h"
+#include "afb/figure/Lod.h"
 #include "afb/sim/Scene.h"
 
 using namespace afb;
@@ -344,6 +346,45 @@ TEST_CASE("bullet: ragdolls of one asset share shapes; destroying one removes it
     CHECK(w.world.getNumCollisionObjects() == 0);
     CHECK(w.world.getNumConstraints() == 0);
     w.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60)); // nothing dangling
+}
+
+TEST_CASE("bullet: the world knows every ragdoll body's ragdoll through spawns, removals and LOD switches",
+          "[bullet]") {
+    // RagdollWorld's owner table (hashed by address): it grows past its first size, renumbers the ragdolls after a
+    // removed one, and takes a ragdoll's new bodies after a level-of-detail switch.
+    World w;
+    const auto asset = RagdollAsset::create(test::loadEntity("humanoid").figure);
+    std::vector<std::unique_ptr<Ragdoll>> live;
+    auto spawn = [&](int k) {
+        SpawnOptions o;
+        o.entityTransform.setOrigin(btVector3(btScalar(3 * k), 0, 0));
+        live.push_back(std::make_unique<Ragdoll>(asset, w.scene.ragdollWorld(), o));
+    };
+    auto check = [&] {
+        for (std::size_t i = 0; i < live.size(); ++i)
+            for (int k = 0; k < live[i]->rigidBodyCount(); ++k) {
+                INFO("ragdoll " << i << ", rigid body " << k);
+                CHECK(w.scene.ragdollWorld().ragdollOf(&live[i]->rigidBody(k)) == live[i].get());
+            }
+        btCollisionObject stranger;
+        CHECK(w.scene.ragdollWorld().ragdollOf(&stranger) == nullptr);
+        CHECK(w.scene.ragdollWorld().ragdollOf(nullptr) == nullptr);
+    };
+    for (int k = 0; k < 12; ++k) spawn(k); // over a hundred rigid bodies: the table grows several times
+    check();
+    for (std::size_t i = live.size(); i-- > 0;) // every third from the back: later ragdolls move down
+        if (i % 3 == 0) live.erase(live.begin() + static_cast<std::ptrdiff_t>(i));
+    check();
+    REQUIRE(live.size() > 2);
+    CHECK(live[1]->setLod(figure::automaticLod(asset->figure(), 6)).empty());
+    CHECK(live[1]->rigidBodyCount() == 6);
+    check();
+    for (int k = 12; k < 20; ++k) spawn(k);
+    live[1]->setFullDetail();
+    check();
+    w.scene.step(1.0 / 60);
+    live.clear();
+    check();
 }
 
 TEST_CASE("bullet: collision filtering follows selfCollisionPairs and world attachment (§6.2)", "[bullet]") {

@@ -104,8 +104,24 @@ class RagdollWorld {
         int ragdoll; ///< index into m_ragdolls
         btScalar boundingRadius;
     };
-    std::vector<BodyOwner> m_owners; ///< sorted by body
-    const BodyOwner* ownerOf(const btCollisionObject* body) const;
+    /// The ragdoll bodies of the world by address: open addressing with linear probing, at most half full. Asked
+    /// for every contact pair and manifold each step (a sorted table's binary search cost 3 % of a step).
+    class OwnerTable {
+      public:
+        const BodyOwner* find(const btCollisionObject* body) const;
+        void insert(const BodyOwner& owner); ///< a body already present keeps its entry
+        /// Removes ragdoll `index`'s bodies; later ragdolls' indices go down by one when `renumber`.
+        void removeRagdoll(int index, bool renumber);
+
+      private:
+        std::size_t slotOf(const btCollisionObject* body) const;
+        void grow();
+        std::vector<BodyOwner> m_slots; ///< body null: empty; the size a power of two
+        std::size_t m_count = 0;
+        int m_shift = 64; ///< 64 − log2(slots)
+    };
+    OwnerTable m_owners;
+    const BodyOwner* ownerOf(const btCollisionObject* body) const { return m_owners.find(body); }
     /// How far a ragdoll body's surface can move in `dt` seconds (0 for other objects), metres.
     btScalar reachOf(const btCollisionObject* body, btScalar dt) const;
     /// The contact breaking threshold of a manifold between `a` and `b` for a substep of `dt` (speculative contacts).
