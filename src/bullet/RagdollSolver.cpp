@@ -826,11 +826,20 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
     } else if (m_resolveSingleConstraintRowGeneric == detail::resolveRowGeneric) {
         setupSolverFunctions((infoGlobal.m_solverMode & SOLVER_SIMD) != 0); // what Bullet's setup installs
     }
-    if (!m_direct->enabled || m_rows.size() == 0 || !buildDirect())
+    if (!m_direct->enabled || m_rows.size() == 0 || !buildDirect()) {
+        // Our loop (solveSingleIteration) takes the islands in turn; Bullet's own modes that reorder keep its order.
+        const int reordering = SOLVER_RANDMIZE_ORDER | SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS;
+        if (!m_simdRows || (infoGlobal.m_solverMode & reordering) != 0 ||
+            !m_islandOrder.build(m_tmpSolverBodyPool, m_tmpSolverNonContactConstraintPool,
+                                 m_tmpSolverContactConstraintPool, m_tmpSolverContactFrictionConstraintPool))
+            m_islandOrder.clear();
+        m_mostIslandsInTurn = std::max(m_mostIslandsInTurn, m_islandOrder.islands);
         return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(bodies, numBodies, manifoldPtr,
                                                                                       numManifolds, constraints,
                                                                                       numConstraints, infoGlobal,
                                                                                       debugDrawer);
+    }
+    m_islandOrder.clear();
     // Contact penetration (split impulse: velocities that move the bodies this step and are then forgotten),
     // through the groups' responses too, so that lifting a foot out of the ground lifts the leg with it.
     if (infoGlobal.m_splitImpulse) solveDirectSplitImpulse(infoGlobal);
@@ -857,6 +866,77 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
     return 0;
 }
 
+bool RagdollSolver::IslandOrder::build(const btAlignedObjectArray<btSolverBody>& bodies,
+                                       const btAlignedObjectArray<btSolverConstraint>& nonContactPool,
+                                       const btAlignedObjectArray<btSolverConstraint>& contactPool,
+                                       const btAlignedObjectArray<btSolverConstraint>& frictionPool) {
+    clear();
+    const auto at = [](std::vector<int>& v, int i) -> int& { return v[static_cast<std::size_t>(i)]; };
+    // Islands: bodies joined by a row, over the bodies a row can move (the static world body, which has no
+    // original body, is read by many islands and written by none).
+    const int n = bodies.size();
+    parent.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) at(parent, i) = i;
+    const auto root = [&](int i) {
+        while (at(parent, i) != i) i = at(parent, i) = at(parent, at(parent, i));
+        return i;
+    };
+    const auto moves = [&](int id) { return bodies[id].m_originalBody != nullptr; };
+    const btAlignedObjectArray<btSolverConstraint>* pools[3] = {&nonContactPool, &contactPool, &frictionPool};
+    for (const auto* pool : pools)
+        for (int j = 0; j < pool->size(); ++j) {
+            const btSolverConstraint& c = (*pool)[j];
+            if (moves(c.m_solverBodyIdA) && moves(c.m_solverBodyIdB))
+                at(parent, root(c.m_solverBodyIdA)) = root(c.m_solverBodyIdB);
+        }
+    // Numbered by first appearance; rows that move no body (both sides static) form one more island.
+    island.assign(static_cast<std::size_t>(n) + 1, -1);
+    int found = 0;
+    const auto islandOf = [&](const btSolverConstraint& c) {
+        const int id = moves(c.m_solverBodyIdA)   ? root(c.m_solverBodyIdA)
+                       : moves(c.m_solverBodyIdB) ? root(c.m_solverBodyIdB)
+                                                  : n;
+        int& k = at(island, id);
+        if (k < 0) k = found++;
+        return k;
+    };
+    std::vector<int>* orders[3] = {&nonContact, &contact, &friction};
+    for (int p = 0; p < 3; ++p) {
+        const auto& pool = *pools[p];
+        std::vector<int>& order = *orders[p];
+        const int rows = pool.size();
+        // The rows by island, each island's in pool order (a counting sort into `byIsland`)...
+        rowIsland.resize(static_cast<std::size_t>(rows));
+        for (int j = 0; j < rows; ++j) at(rowIsland, j) = islandOf(pool[j]);
+        first.assign(static_cast<std::size_t>(found) + 1, 0);
+        for (int j = 0; j < rows; ++j) ++at(first, at(rowIsland, j) + 1);
+        for (int k = 0; k < found; ++k) at(first, k + 1) += at(first, k);
+        end.assign(first.begin(), first.end() - 1); // a cursor per island while filling, its end after
+        byIsland.resize(static_cast<std::size_t>(rows));
+        for (int j = 0; j < rows; ++j) at(byIsland, at(end, at(rowIsland, j))++) = j;
+        // ...then a row of each island in turn, an island leaving the turn when its rows are out.
+        active.clear();
+        for (int k = 0; k < found; ++k)
+            if (at(end, k) > at(first, k)) active.push_back(k);
+        order.clear();
+        order.reserve(static_cast<std::size_t>(rows));
+        while (!active.empty()) {
+            std::size_t kept = 0;
+            for (const int k : active) {
+                order.push_back(at(byIsland, at(first, k)++));
+                if (at(first, k) < at(end, k)) active[kept++] = k;
+            }
+            active.resize(kept);
+        }
+    }
+    if (found < 2) {
+        clear();
+        return false;
+    }
+    islands = found;
+    return true;
+}
+
 RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
 
 RagdollSolver::~RagdollSolver() = default;
@@ -881,8 +961,14 @@ btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** 
     };
     using Generic = std::true_type;
     using LowerLimit = std::false_type;
+    // The islands in turn (m_islandOrder) when it was built for this solve, else Bullet's order.
+    const bool inTurn = m_islandOrder.islands > 0;
+    const auto orderOf = [inTurn](const std::vector<int>& mine, const btAlignedObjectArray<int>& bullets) {
+        return inTurn ? mine.data() : bullets.size() > 0 ? &bullets[0] : nullptr;
+    };
+    const int* nonContactOrder = orderOf(m_islandOrder.nonContact, m_orderNonContactConstraintPool);
     for (int j = 0; j < m_tmpSolverNonContactConstraintPool.size(); ++j) {
-        const btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[m_orderNonContactConstraintPool[j]];
+        const btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[nonContactOrder[j]];
         if (iteration < c.m_overrideNumSolverIterations) solve(c, Generic{});
     }
     if (iteration >= infoGlobal.m_numIterations) return residual;
@@ -912,10 +998,11 @@ btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** 
                          total);
         }
     } else {
-        for (int j = 0; j < contacts; ++j)
-            solve(m_tmpSolverContactConstraintPool[m_orderTmpConstraintPool[j]], LowerLimit{});
+        const int* contactOrder = orderOf(m_islandOrder.contact, m_orderTmpConstraintPool);
+        const int* frictionOrder = orderOf(m_islandOrder.friction, m_orderFrictionConstraintPool);
+        for (int j = 0; j < contacts; ++j) solve(m_tmpSolverContactConstraintPool[contactOrder[j]], LowerLimit{});
         for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j) {
-            btSolverConstraint& f = m_tmpSolverContactFrictionConstraintPool[m_orderFrictionConstraintPool[j]];
+            btSolverConstraint& f = m_tmpSolverContactFrictionConstraintPool[frictionOrder[j]];
             friction(f, m_tmpSolverContactConstraintPool[f.m_frictionIndex].m_appliedImpulse);
         }
     }

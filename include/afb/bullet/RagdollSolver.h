@@ -49,6 +49,10 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// scalar reference itself (off; what `raw`, plain Bullet, runs).
     void setSimdRows(bool on) { m_simdRows = on; }
     bool simdRows() const { return m_simdRows; }
+    /// The most islands one solve of Bullet's iterations took in turn in the last step (a row of each; Bullet
+    /// solves small islands together), 0 when every solve kept Bullet's order (SIMD rows off, one island per solve,
+    /// or a solver mode that orders rows itself).
+    int islandsInTurn() const { return m_mostIslandsInTurn; }
 
     /// The largest impulse (N·s) a contact point of `manifold` may start a step of `dt` seconds from (warm start),
     /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
@@ -58,6 +62,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     const ContactWarmStartCap& contactWarmStartCap() const { return m_contactCap; }
 
   protected:
+    void prepareSolve(int, int) override { m_mostIslandsInTurn = 0; } // once per step, before its solves
     void convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
                          const btContactSolverInfo& infoGlobal) override;
     void convertJoints(btTypedConstraint** constraints, int numConstraints,
@@ -86,6 +91,27 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
         bool warmStart = true;
         bool direct = false;
     };
+    /// The iterations' row order over the islands Bullet solves together (it batches small islands into one solve):
+    /// each island's rows in Bullet's order, the islands taken in turn, a row of each, so that the next row rarely
+    /// waits for the last one's bodies. Islands share no body that a row moves (the static world body is never
+    /// written), so every island's result is the same to the bit. Built per solve when the SIMD rows are on.
+    struct IslandOrder {
+        std::vector<int> nonContact, contact, friction; ///< pool indices; empty: Bullet's order
+        int islands = 0;                                ///< taken in turn (0: Bullet's order)
+        std::vector<int> parent, island, rowIsland, first, end, byIsland, active; ///< scratch
+        bool build(const btAlignedObjectArray<btSolverBody>& bodies,
+                   const btAlignedObjectArray<btSolverConstraint>& nonContactPool,
+                   const btAlignedObjectArray<btSolverConstraint>& contactPool,
+                   const btAlignedObjectArray<btSolverConstraint>& frictionPool);
+        void clear() {
+            nonContact.clear();
+            contact.clear();
+            friction.clear();
+            islands = 0;
+        }
+    };
+    IslandOrder m_islandOrder;
+    int m_mostIslandsInTurn = 0;
     struct Direct;
     bool buildDirect();
     btScalar solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal);
