@@ -415,6 +415,12 @@ RagdollWorld::~RagdollWorld() {
     m_world.removeAction(m_action.get());
 }
 
+namespace {
+// A removed entry's key: the slot stays taken for the probes that passed it (no object lives at this address).
+const char kRemovedKey = 0;
+const btCollisionObject* removed() { return reinterpret_cast<const btCollisionObject*>(&kRemovedKey); }
+} // namespace
+
 std::size_t RagdollWorld::OwnerTable::slotOf(const btCollisionObject* body) const {
     // Fibonacci hashing of the address (its low bits are the allocator's alignment).
     const auto key = static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(body) >> 4);
@@ -422,7 +428,7 @@ std::size_t RagdollWorld::OwnerTable::slotOf(const btCollisionObject* body) cons
 }
 
 const RagdollWorld::BodyOwner* RagdollWorld::OwnerTable::find(const btCollisionObject* body) const {
-    if (m_count == 0) return nullptr;
+    if (m_count == 0 || body == nullptr) return nullptr;
     const std::size_t mask = m_slots.size() - 1;
     for (std::size_t i = slotOf(body);; i = (i + 1) & mask) {
         const BodyOwner& s = m_slots[i];
@@ -432,38 +438,46 @@ const RagdollWorld::BodyOwner* RagdollWorld::OwnerTable::find(const btCollisionO
 }
 
 void RagdollWorld::OwnerTable::insert(const BodyOwner& owner) {
-    if (2 * (m_count + 1) > m_slots.size()) grow();
+    if (2 * (m_count + m_removed + 1) > m_slots.size()) rehash();
     const std::size_t mask = m_slots.size() - 1;
+    BodyOwner* reuse = nullptr; // the first removed entry on the way, taken if the body is not further on
     for (std::size_t i = slotOf(owner.body);; i = (i + 1) & mask) {
         BodyOwner& s = m_slots[i];
         if (s.body == owner.body) return;
+        if (s.body == removed() && reuse == nullptr) reuse = &s;
         if (s.body == nullptr) {
-            s = owner;
+            if (reuse != nullptr) --m_removed;
+            *(reuse != nullptr ? reuse : &s) = owner;
             ++m_count;
             return;
         }
     }
 }
 
-void RagdollWorld::OwnerTable::grow() {
-    std::vector<BodyOwner> old(std::max<std::size_t>(16, 2 * m_slots.size()), BodyOwner{nullptr, -1, 0});
+void RagdollWorld::OwnerTable::rehash() {
+    // At most a third taken by live entries afterwards (the removed ones are dropped).
+    const std::size_t size = std::max<std::size_t>(16, std::bit_ceil(3 * (m_count + 1)));
+    std::vector<BodyOwner> old(size, BodyOwner{nullptr, -1, 0});
     old.swap(m_slots);
     m_shift = 64 - std::countr_zero(m_slots.size());
-    m_count = 0;
+    m_count = m_removed = 0;
     for (const BodyOwner& o : old)
-        if (o.body != nullptr) insert(o);
+        if (o.ragdoll >= 0) insert(o);
 }
 
 void RagdollWorld::OwnerTable::removeRagdoll(int index, bool renumber) {
-    // Rebuilt in its slots: a removal is as rare as a spawn, and linear in the world's ragdoll bodies as before.
-    std::vector<BodyOwner> kept;
-    kept.reserve(m_count);
-    for (const BodyOwner& o : m_slots)
-        if (o.body != nullptr && o.ragdoll != index)
-            kept.push_back({o.body, renumber && o.ragdoll > index ? o.ragdoll - 1 : o.ragdoll, o.boundingRadius});
-    std::fill(m_slots.begin(), m_slots.end(), BodyOwner{nullptr, -1, 0});
-    m_count = 0;
-    for (const BodyOwner& o : kept) insert(o);
+    // One pass over the slots, without branches on their contents (empty and removed slots hold ragdoll −1, which
+    // is neither `index` nor above it): the ragdoll's entries become removed keys, later ragdolls' indices go down.
+    std::size_t gone = 0;
+    for (BodyOwner& o : m_slots) {
+        const bool mine = o.ragdoll == index;
+        const int down = renumber && o.ragdoll > index ? 1 : 0;
+        o.body = mine ? removed() : o.body;
+        o.ragdoll = mine ? -1 : o.ragdoll - down;
+        gone += mine ? 1 : 0;
+    }
+    m_count -= gone;
+    m_removed += gone;
 }
 
 // Linear speed plus angular speed times the shape's bounding radius, with a 25 % allowance for the acceleration

@@ -104,7 +104,7 @@ class RagdollWorld {
         int ragdoll; ///< index into m_ragdolls
         btScalar boundingRadius;
     };
-    /// The ragdoll bodies of the world by address: open addressing with linear probing, at most half full. Asked
+    /// The ragdoll bodies of the world by address: open addressing with linear probing, at most half taken. Asked
     /// for every contact pair and manifold each step (a sorted table's binary search cost 3 % of a step).
     class OwnerTable {
       public:
@@ -115,10 +115,11 @@ class RagdollWorld {
 
       private:
         std::size_t slotOf(const btCollisionObject* body) const;
-        void grow();
+        void rehash();
         std::vector<BodyOwner> m_slots; ///< body null: empty; the size a power of two
-        std::size_t m_count = 0;
-        int m_shift = 64; ///< 64 − log2(slots)
+        std::size_t m_count = 0;        ///< live entries
+        std::size_t m_removed = 0;      ///< slots of removed entries (kept until the next rehash)
+        int m_shift = 64;               ///< 64 − log2(slots)
     };
     OwnerTable m_owners;
     const BodyOwner* ownerOf(const btCollisionObject* body) const { return m_owners.find(body); }
