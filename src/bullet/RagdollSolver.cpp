@@ -900,6 +900,13 @@ bool RagdollSolver::IslandOrder::build(const btAlignedObjectArray<btSolverBody>&
         if (k < 0) k = found++;
         return k;
     };
+    // One island (a lone ragdoll, a batch of one): Bullet's order, before any sorting.
+    for (const auto* pool : pools)
+        for (int j = 0; j < pool->size(); ++j) islandOf((*pool)[j]);
+    if (found < 2) {
+        clear();
+        return false;
+    }
     std::vector<int>* orders[3] = {&nonContact, &contact, &friction};
     for (int p = 0; p < 3; ++p) {
         const auto& pool = *pools[p];
@@ -928,10 +935,6 @@ bool RagdollSolver::IslandOrder::build(const btAlignedObjectArray<btSolverBody>&
             }
             active.resize(kept);
         }
-    }
-    if (found < 2) {
-        clear();
-        return false;
     }
     islands = found;
     return true;

@@ -45,8 +45,9 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     bool directJoints() const;
 
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
-    /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, or that
-    /// scalar reference itself (off; what `raw`, plain Bullet, runs).
+    /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, with the
+    /// islands of a solve taken in turn (islandsInTurn; each island's result unchanged to the bit), or that scalar
+    /// reference itself in Bullet's loop and order (off; what `raw`, plain Bullet, runs).
     void setSimdRows(bool on) { m_simdRows = on; }
     bool simdRows() const { return m_simdRows; }
     /// The most islands one solve of Bullet's iterations took in turn in the last step (a row of each; Bullet
