@@ -12,9 +12,12 @@ namespace {
 constexpr std::array<std::string_view, 7> kPresetNames = {"fast",  "iterative", "default",  "accurate",
                                                           "exact", "legacy",    "multibody"};
 
-const std::array<MethodKnob, 26> kKnobs = {{
+const std::array<MethodKnob, 28> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
+    {"impact-substeps",
+     "Most substeps of a frame while a ragdoll and another object's dynamic body close fast (1: off)",
+     &Method::impactSubsteps},
     {"iterations", "Solver iterations of the world (contacts)", &Method::iterations},
     {"joint-iterations", "Solver iterations of the figure's joints and limits (0: the world's)",
      &Method::jointIterations},
@@ -62,6 +65,9 @@ const std::array<MethodKnob, 26> kKnobs = {{
     {"constant-velocity-universal",
      "Universal joints as a constant-velocity constraint whose twist row always exists, not btConeTwist (on/off)",
      &Method::constantVelocityUniversal},
+    {"friction-through-figure",
+     "Contact friction moves the whole ragdoll as its joints let it, not one body (on/off; needs direct-joints)",
+     &Method::frictionThroughFigure},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
@@ -70,6 +76,7 @@ struct Range {
 };
 Range rangeOf(std::string_view knob) {
     if (knob == "substeps") return {1, 64};
+    if (knob == "impact-substeps") return {1, 64};
     if (knob == "iterations") return {1, 1000};
     if (knob == "joint-iterations") return {0, 1000};
     if (knob == "position-iterations") return {0, 100};
@@ -115,6 +122,7 @@ Method iterativeJoints(Method method) {
     method.positionTree = 0;
     method.frictionDirections = 1;
     method.constantVelocityUniversal = false;
+    method.frictionThroughFigure = false;
     return method;
 }
 
@@ -143,6 +151,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.mergeFixed = false;
         m.exemptOverlapping = false;
         m.constantVelocityUniversal = false;
+        m.impactSubsteps = 1;
         return m;
     }
     if (name == "iterative") {

@@ -141,6 +141,7 @@ struct RagdollSolver::Direct {
     }
 
     bool enabled = false;
+    bool frictionThroughGroups = false; // Method::frictionThroughFigure
     // The groups of this step are the first `used`; the others wait, with their buffers, for a later step.
     std::vector<Group> groups;
     std::size_t used = 0;
@@ -294,6 +295,8 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
 
 void RagdollSolver::setDirectJoints(bool on) { m_direct->enabled = on; }
 bool RagdollSolver::directJoints() const { return m_direct->enabled; }
+void RagdollSolver::setFrictionThroughGroups(bool on) { m_direct->frictionThroughGroups = on; }
+bool RagdollSolver::frictionThroughGroups() const { return m_direct->frictionThroughGroups; }
 
 bool RagdollSolver::buildDirect() {
     Direct& d = *m_direct;
@@ -411,8 +414,8 @@ bool RagdollSolver::buildDirect() {
             group.lambda(i) = double(pool[group.rows[static_cast<std::size_t>(i)].pool].m_appliedImpulse);
     }
     // The other rows, with their responses through the groups.
-    // Friction rows keep Bullet's response (the next block solve restores the joints they disturb): giving them
-    // the group's too tripled the rows that need one and changed no metric (README: Methods).
+    // Friction rows keep Bullet's response unless frictionThroughGroups (the next block solve restores the joints
+    // they disturb, but the last iteration's friction leaves them disturbed; README: Methods, point 20).
     auto addFree = [&](std::vector<Direct::FreeRow>& out, btSolverConstraint& c, bool throughGroups) {
         Direct::FreeRow fr;
         fr.c = &c;
@@ -438,13 +441,18 @@ bool RagdollSolver::buildDirect() {
     // is then a thousand times the bodies' own; against a penetration bias that asks for a separation the joints
     // forbid, such a row pumped impulses of kN·s into the joints (a humanoid came apart in the air after a 100 m
     // drop).
+    auto betweenGroups = [&](const btSolverConstraint& c) {
+        const int ga = d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)];
+        return ga < 0 || ga != d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)];
+    };
     for (int j = 0; j < m_tmpSolverContactConstraintPool.size(); ++j) {
         btSolverConstraint& c = m_tmpSolverContactConstraintPool[j];
-        const int ga = d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)];
-        addFree(d.contact, c, ga < 0 || ga != d.groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)]);
+        addFree(d.contact, c, betweenGroups(c));
     }
-    for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j)
-        addFree(d.friction, m_tmpSolverContactFrictionConstraintPool[j], false);
+    for (int j = 0; j < m_tmpSolverContactFrictionConstraintPool.size(); ++j) {
+        btSolverConstraint& c = m_tmpSolverContactFrictionConstraintPool[j];
+        addFree(d.friction, c, d.frictionThroughGroups && betweenGroups(c));
+    }
     // Per group, the columns J M⁻¹ Jᵣᵀ of the free rows touching it. A row that touches only groups factored
     // along their trees waits until an update first needs its effective mass (complete()): a contact or limit row
     // that stays apart for the whole solve never pays for its responses (46 % of the columns of `exact`'s

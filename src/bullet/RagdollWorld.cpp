@@ -117,8 +117,10 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     else info.m_solverMode &= ~(SOLVER_USE_WARMSTARTING | SOLVER_USE_ARTICULATED_WARMSTARTING);
     if (m.frictionDirections >= 2) info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
     else info.m_solverMode &= ~SOLVER_USE_2_FRICTION_DIRECTIONS;
-    if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver()))
+    if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver())) {
         solver->setDirectJoints(m.directJoints);
+        solver->setFrictionThroughGroups(m.frictionThroughFigure);
+    }
     // The direct solve takes a batch of islands (Bullet batches small islands up to m_minimumSolverBatchSize
     // constraints) through its own path when a ragdoll is in it and through Bullet's otherwise, and the two round
     // differently: a game's box alone in its island then moved by 10⁻⁸ m differently when a ragdoll elsewhere
@@ -498,9 +500,36 @@ btScalar RagdollWorld::breakingThreshold(const btCollisionObject* a, const btCol
     return btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reachOf(a, dt) + reachOf(b, dt));
 }
 
+int RagdollWorld::substepsFor(double dtSeconds) const {
+    const int least = std::max(1, m_method.substeps);
+    if (m_method.impactSubsteps <= least) return least;
+    // How fast the last step's contacts between a ragdoll body and another object's dynamic body close, along
+    // their normals (a speculative point of a pair about to meet counts: its manifold holds it already).
+    btScalar closing = 0;
+    btDispatcher& dispatcher = *m_world.getDispatcher();
+    for (int i = 0, n = dispatcher.getNumManifolds(); i < n; ++i) {
+        const btPersistentManifold& m = *dispatcher.getManifoldByIndexInternal(i);
+        if (m.getNumContacts() == 0) continue;
+        const btRigidBody* a = btRigidBody::upcast(m.getBody0());
+        const btRigidBody* b = btRigidBody::upcast(m.getBody1());
+        if (a == nullptr || b == nullptr || a->isStaticOrKinematicObject() || b->isStaticOrKinematicObject()) continue;
+        const BodyOwner* ownerA = ownerOf(a);
+        const BodyOwner* ownerB = ownerOf(b);
+        if ((ownerA == nullptr && ownerB == nullptr) || (ownerA && ownerB && ownerA->ragdoll == ownerB->ragdoll))
+            continue;
+        const btVector3 relative = a->getLinearVelocity() - b->getLinearVelocity();
+        for (int k = 0; k < m.getNumContacts(); ++k)
+            closing = btMax(closing, -relative.dot(m.getContactPoint(k).m_normalWorldOnB));
+    }
+    const double travel = double(closing) * dtSeconds / least;
+    if (!(travel > kImpactTravelM)) return least;
+    return static_cast<int>(std::min<double>(m_method.impactSubsteps, std::ceil(least * travel / kImpactTravelM)));
+}
+
 void RagdollWorld::step(double dtSeconds) {
     for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step
-    const int substeps = std::max(1, m_method.substeps);
+    const int substeps = substepsFor(dtSeconds);
+    m_lastSubsteps = substeps;
     m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
 }
 

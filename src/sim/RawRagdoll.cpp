@@ -36,6 +36,8 @@ bullet::Method rawMethod() {
     m.positionIterations = 0;
     m.positionTree = 0;
     m.directJoints = false;
+    m.frictionThroughFigure = false;
+    m.impactSubsteps = 1;
     m.speculativeContacts = false;
     m.speculativeLimits = false;
     m.jointWarmStarting = false;
@@ -63,6 +65,8 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.mergeFixed) knobs += " merge-fixed";
     if (m.exemptOverlapping) knobs += " exempt-overlapping";
     if (m.constantVelocityUniversal) knobs += " constant-velocity-universal";
+    if (m.frictionThroughFigure) knobs += " friction-through-figure";
+    if (m.impactSubsteps > 1) knobs += " impact-substeps";
     if (knobs.empty()) return {};
     return "method raw (plain Bullet) has no" + knobs + ": leave them off";
 }

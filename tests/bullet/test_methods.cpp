@@ -4,10 +4,12 @@
 // a light body on the ground under a heavy one. Deterministic: fixed 60 Hz step, fixed insertion order.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "EntityFixture.h"
 #include "FigureFixture.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
@@ -964,4 +966,99 @@ TEST_CASE("direct joints: a body landing on a light foot is stopped through the 
     INFO("sequential impulse " << sequential << " m, direct " << direct << " m");
     CHECK(sequential > 0.01);
     CHECK(direct < 0.002);
+}
+
+TEST_CASE("friction through the figure: a humanoid lying still keeps its hinges' axes together", "[bullet][methods]") {
+    // Under the direct joint solve each iteration ends with the contact friction rows. Solved with one body's
+    // response (the default), they leave the joints they disturbed to the next iteration's joint solve, and the
+    // last iteration's disturbance is left for good: a humanoid lying still ends each step with its knees and
+    // hips turning apart about their locked axes at up to 0.18 rad/s, which the position pass takes back. With
+    // Method::frictionThroughFigure the friction rows move the figure as its joints let it and the solve ends with
+    // the joints held. Without the position pass, what the velocities leave shows as hinges whose two axes part
+    // while the figure lies still (Bullet's joint ERP alone pulls them back).
+    const auto loaded = afb::test::loadEntity("humanoid");
+    const auto asset = RagdollAsset::create(loaded.figure);
+    const afb::figure::Figure& fig = loaded.figure;
+    // The largest angle between a hinge's axis in its two bodies over the 4 s after 2 s on the ground.
+    auto worstHingeAxes = [&](bool through) {
+        Method m = *afb::bullet::methodPreset("default");
+        m.positionIterations = 0;
+        m.positionTree = 0;
+        m.frictionThroughFigure = through;
+        afb::sim::Scene scene(m);
+        afb::bullet::SpawnOptions o;
+        o.comeToRest = false;
+        o.entityTransform = btTransform(btQuaternion(btVector3(0, 1, 0), btScalar(-90 * kDeg)), btVector3(0, 0, 0.3f));
+        Ragdoll& r = scene.spawn(asset, o);
+        double worst = 0;
+        for (int s = 0; s < 360; ++s) {
+            scene.step(1.0 / 60);
+            if (s < 120) continue;
+            const std::vector<afb::figure::Transform> t = r.bodyTransforms();
+            for (const afb::figure::FigureConstraint& c : fig.constraints) {
+                if (c.type != afb::figure::JointType::Hinge || c.body2 < 0) continue;
+                const Eigen::Vector3d a1 = (t[static_cast<std::size_t>(c.body1)] * c.frameInBody1).rotation.col(2);
+                const Eigen::Vector3d a2 = (t[static_cast<std::size_t>(c.body2)] * c.frameInBody2).rotation.col(2);
+                worst = std::max(worst, std::atan2(a1.cross(a2).norm(), a1.dot(a2)));
+            }
+        }
+        return worst;
+    };
+    const double oneBody = worstHingeAxes(false), through = worstHingeAxes(true);
+    INFO("hinge axes apart: one-body friction " << oneBody / kDeg << " deg, through the figure " << through / kDeg
+                                                << " deg");
+    CHECK(oneBody > 0.18 * kDeg);
+    CHECK(through < 0.12 * kDeg);
+    REQUIRE(afb::bullet::findKnob("friction-through-figure") != nullptr);
+    CHECK_FALSE(afb::bullet::methodPreset("default")->frictionThroughFigure);
+}
+
+TEST_CASE("impact substeps: a frame takes more substeps only while two objects' bodies close fast",
+          "[bullet][methods]") {
+    // A box rests on a box lying on the ground (their manifold holds points); then the upper one is sent down at
+    // 8 m/s, 13.3 cm in a 60 Hz frame: that frame takes ceil(13.3 / 5) = 3 substeps (Method::impactSubsteps,
+    // kImpactTravelM) and the contact stops the box within it, so the frames after take one again. A box falling
+    // onto the other is stopped by its speculative contact in the step that first finds it (it never closes
+    // fast at a frame's start), and a single humanoid dropped 10 m (its own bodies, the ground) never takes more.
+    const afb::figure::Figure boxFig = boxFigure();
+    auto substepsSeen = [&](int impactSubsteps, double drop) {
+        Method m = *afb::bullet::methodPreset("default");
+        m.impactSubsteps = impactSubsteps;
+        afb::sim::Scene scene(m);
+        afb::bullet::SpawnOptions lower, upper;
+        lower.comeToRest = upper.comeToRest = false;
+        upper.entityTransform.setOrigin(btVector3(0.05f, 0, btScalar(8 * kUnit + drop)));
+        Ragdoll& low = scene.spawn(RagdollAsset::create(boxFig), lower);
+        Ragdoll& high = scene.spawn(RagdollAsset::create(boxFig), upper);
+        std::vector<int> seen;
+        for (int s = 0; s < 120; ++s) {
+            if (s == 60) high.body(0).setLinearVelocity(btVector3(0, 0, -8));
+            scene.step(1.0 / 60);
+            seen.push_back(scene.ragdollWorld().lastSubsteps());
+        }
+        // The upper box ends on the lower one, a box's height above it.
+        const double above = high.body(0).getCenterOfMassPosition().z() - low.body(0).getCenterOfMassPosition().z();
+        CHECK(above == Approx(8 * kUnit).margin(0.005));
+        return seen;
+    };
+    for (const double drop : {0.0, 2.0}) {
+        INFO("dropped from " << drop << " m onto the lower box");
+        const std::vector<int> on = substepsSeen(4, drop), off = substepsSeen(1, drop);
+        CHECK(on[60] == 3);
+        CHECK(std::count(on.begin(), on.end(), 1) == static_cast<long>(on.size()) - 1);
+        CHECK(*std::max_element(off.begin(), off.end()) == 1);
+    }
+
+    const auto loaded = afb::test::loadEntity("humanoid");
+    afb::sim::Scene scene(*afb::bullet::methodPreset("default"));
+    afb::bullet::SpawnOptions o;
+    o.comeToRest = false;
+    o.entityTransform.setOrigin(btVector3(0, 0, 10));
+    scene.spawn(RagdollAsset::create(loaded.figure), o);
+    int most = 0;
+    for (int s = 0; s < 180; ++s) {
+        scene.step(1.0 / 60);
+        most = std::max(most, scene.ragdollWorld().lastSubsteps());
+    }
+    CHECK(most == 1);
 }

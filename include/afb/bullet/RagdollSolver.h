@@ -39,10 +39,15 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
 
     /// The direct joint solve (Method::directJoints): each iteration solves the unbounded rows of the constraints
     /// tracked with `direct` exactly, per connected group of bodies (an LDLᵀ factorisation of J M⁻¹ Jᵀ per group
-    /// and solve), and every other row touching a group (contacts, friction, limits, joint friction) moves the
-    /// whole group as its joints let it, with the group's effective mass at that row. Off: Bullet's iterations.
+    /// and solve), and the contact and limit rows touching a group move the whole group as its joints let it, with
+    /// the group's effective mass at that row; contact friction (unless setFrictionThroughGroups) and joint friction
+    /// keep Bullet's response, and the next joint solve restores what they disturb. Off: Bullet's iterations.
     void setDirectJoints(bool on);
     bool directJoints() const;
+    /// Under the direct joint solve, contact friction rows move the whole group too (Method::frictionThroughFigure),
+    /// except between two bodies of one group; off (the default), they keep Bullet's one-body response.
+    void setFrictionThroughGroups(bool on);
+    bool frictionThroughGroups() const;
 
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
     /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, with the

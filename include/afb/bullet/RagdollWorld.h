@@ -55,9 +55,12 @@ class RagdollWorld {
     /// the iterative default 131 (README: the presets). `methodInForce` gives the same without a world.
     const Method& method() const { return m_method; }
 
-    /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep), after the
-    /// explosion guard of every ragdoll checked what the game wrote since the last frame (Ragdoll::checkGuard).
+    /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep), or more while
+    /// a ragdoll and another object's dynamic body close fast (Method::impactSubsteps), after the explosion guard
+    /// of every ragdoll checked what the game wrote since the last frame (Ragdoll::checkGuard).
     void step(double dtSeconds);
+    /// The substeps the last step() took.
+    int lastSubsteps() const { return m_lastSubsteps; }
 
     /// Whether the engine's contact friction is in force (another contact callback may own Bullet's hook).
     bool engineContactFriction() const { return m_friction.active(); }
@@ -127,6 +130,9 @@ class RagdollWorld {
     btScalar reachOf(const btCollisionObject* body, btScalar dt) const;
     /// The contact breaking threshold of a manifold between `a` and `b` for a substep of `dt` (speculative contacts).
     btScalar breakingThreshold(const btCollisionObject* a, const btCollisionObject* b, btScalar dt) const;
+    /// The substeps of a frame of `dtSeconds`: the method's, or more for a fast impact (Method::impactSubsteps).
+    int substepsFor(double dtSeconds) const;
+    int m_lastSubsteps = 1;
     std::unique_ptr<PositionAction> m_action;
     std::unique_ptr<MergedBodies> m_mergedBodies; ///< contacts of merged bodies (Method::mergeFixed), child by child
 };
