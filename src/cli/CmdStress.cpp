@@ -103,8 +103,9 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("--base", opt->base, "Content folder with the humanoid (af/, def/, models/)")
         ->capture_default_str();
-    cmd->add_option("--methods", opt->methods,
-                    "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp")
+    cmd->add_option(
+           "--methods", opt->methods,
+           "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp, +rest")
         ->delimiter(',')
         ->capture_default_str();
     cmd->add_option("--scenarios", opt->scenarios, "Scenarios, comma-separated (default: all; --list names them)")

@@ -303,15 +303,16 @@ std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string
         const std::string_view item = rest.substr(0, next);
         if (item == "stabilize") m.stabilize = true;
         else if (item == "clamp") m.clamp = {kStressClampLinearMps, kStressClampAngularRadps};
+        else if (item == "rest") m.restRules = true;
         else {
             error = "method " + std::string(spec) + ": unknown mitigation '+" + std::string(item) +
-                    "' (+stabilize, +clamp)";
+                    "' (+stabilize, +clamp, +rest)";
             return std::nullopt;
         }
         if (next == std::string_view::npos) break;
         rest = rest.substr(next + 1);
     }
-    if (isRaw(m.method) && (m.stabilize || m.clamp.maxLinearMps > 0)) {
+    if (isRaw(m.method) && (m.stabilize || m.clamp.maxLinearMps > 0 || m.restRules)) {
         error = "method " + std::string(spec) + ": raw (plain Bullet) takes no mitigations";
         return std::nullopt;
     }
@@ -344,8 +345,9 @@ StressResult runStress(const StressSetup& setup, const StressMethod& method, con
         };
         so.entityTransform = bullet::toBt(s.entity);
         // The rest rules would put a jittering figure to sleep (or stop it after maxMoveTime): the stress judges
-        // the method's own physics, so rest is measured (StressThresholds), never imposed.
-        so.comeToRest = false;
+        // the method's own physics, so rest is measured (StressThresholds), never imposed, unless "+rest" asks
+        // for the figures as a game runs them.
+        so.comeToRest = method.restRules;
         so.velocityClamp = method.clamp;
         const auto& asset = assets[s.figure];
         r.bodies += static_cast<int>(asset->figure().bodies.size());
@@ -619,6 +621,7 @@ std::string stressJson(const std::vector<StressResult>& results, const std::vect
                       {"name", m.method.name},
                       {"knobs", knobs},
                       {"stabilize", m.stabilize},
+                      {"rest_rules", m.restRules},
                       {"clamp_linear_mps", m.clamp.maxLinearMps},
                       {"clamp_angular_radps", m.clamp.maxAngularRadps}});
     }

@@ -117,6 +117,26 @@ TEST_CASE("stress: the detector reports the first failure with its documented ca
     }
 }
 
+TEST_CASE("stress: +rest runs the figures under their own rest rules, as a game does", "[sim][stress]") {
+    std::string error;
+    CHECK(sim::parseStressMethod("default+rest", error)->restRules);
+    CHECK_FALSE(sim::parseStressMethod("default", error)->restRules);
+    CHECK_FALSE(sim::parseStressMethod("raw+rest", error));
+    CHECK(error.find("raw") != std::string::npos);
+    CHECK_FALSE(sim::parseStressMethod("default+sleep", error));
+    CHECK(error.find("+rest") != std::string::npos);
+    // The 15 Hz drop settles slowly by the matrix's own measure (nothing moving 10 mm or 2° over a second); the
+    // figure's rest rules (§6.1: noMoveTime 1 s, with the humanoid's looser bounds) put it to sleep much sooner.
+    const sim::StressSetup s = setupOf("humanoid-15hz", bundled());
+    const sim::StressResult measured = sim::runStress(s, method("default"));
+    const sim::StressResult rules = sim::runStress(s, method("default+rest"));
+    REQUIRE(measured.passed());
+    REQUIRE(rules.passed());
+    INFO("rest at " << measured.restAtS.value_or(-1) << " s measured, " << rules.restAtS.value_or(-1)
+                    << " s under the rest rules");
+    CHECK(*rules.restAtS < *measured.restAtS - 2);
+}
+
 TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim][stress]") {
     // Steps of 1/60 s, bounds as documented: 1 s windows, 1 rad/s. A body spinning down in the window's first
     // steps (the settling of the motion before it) is at rest; a body still reporting a spin in its second half

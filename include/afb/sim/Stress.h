@@ -115,14 +115,19 @@ std::vector<std::string_view> stressCiScenarios();
 
 /// A method of the matrix: a preset or raw with knob overrides (afb chart's NAME[:KNOB=VALUE]...), and the
 /// opt-in mitigations, spelled as suffixes: "+stabilize" (figure::stabilizeMassProperties on every figure),
-/// "+clamp" (bullet::VelocityClamp of kStressClampLinearMps and kStressClampAngularRadps). Raw takes neither.
+/// "+clamp" (bullet::VelocityClamp of kStressClampLinearMps and kStressClampAngularRadps), "+rest" (the figures'
+/// rest rules on). Raw takes none of them.
 struct StressMethod : ChartMethod {
     bool stabilize = false;
     bullet::VelocityClamp clamp;
+    /// "+rest": the figures' own rest rules put them to sleep (SpawnOptions::comeToRest), as in a game. Without it
+    /// (the matrix's rule) rest is measured, never imposed: a figure that jitters is seen jittering.
+    bool restRules = false;
 };
 inline constexpr double kStressClampLinearMps = 50.0;
 inline constexpr double kStressClampAngularRadps = 30.0;
-/// Parses a StressMethod spec ("default", "fast:substeps=2+stabilize+clamp"); nullopt with `error` set on a bad one.
+/// Parses a StressMethod spec ("default", "fast:substeps=2+stabilize+clamp+rest"); nullopt with `error` set on a bad
+/// one.
 std::optional<StressMethod> parseStressMethod(std::string_view spec, std::string& error);
 
 /// One run of the matrix: a scenario, turned by a yaw, run with a method until it fails, comes to rest or reaches
