@@ -29,12 +29,12 @@ enum class CcdPolicy {
     FastBodies, ///< a body moving more than its inner radius in a step is swept as a sphere of that radius
 };
 
-/// Every knob of how a figure is stepped. A plain, comparable value: copy it, change a field, pass it on.
-/// Default-constructed, it is the "default" preset.
 /// The closing distance per substep between a ragdoll body and another object's dynamic body above which
 /// Method::impactSubsteps divides a frame further, metres.
 inline constexpr double kImpactTravelM = 0.05;
 
+/// Every knob of how a figure is stepped. A plain, comparable value: copy it, change a field, pass it on.
+/// Default-constructed, it is the "default" preset.
 struct Method {
     /// The preset the value started from ("default", "fast", …), for reports; overrides do not rename it.
     std::string name = "default";
