@@ -49,7 +49,7 @@ struct Method {
     /// (1: off; `substeps` stays the least). A single ragdoll (its own bodies, the ground, static objects) never
     /// takes more. Substeps are the world's: the frame's other objects take them too. `afb stress`'s pile of 160
     /// humanoids, 1 substep: two feet 5.4 cm inside each other at 1.03 s; with 4 here it holds every bound for the
-    /// 30 s (deepest 30 mm), at a third of the cost of 3 substeps throughout (README: Stability). On in every
+    /// 30 s (deepest 30 mm), for 42 % of the CPU of 3 substeps throughout (README: Stability). On in every
     /// preset but legacy (afbullet 0.1's method).
     int impactSubsteps = 4;
     /// Sequential-impulse iterations of the world's solver (contacts, and joints without their own count).
