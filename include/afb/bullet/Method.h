@@ -176,7 +176,7 @@ struct Method {
     /// that come last in each iteration leave the joints they disturbed for the next iteration's joint solve: a
     /// humanoid lying still ends every step with its hips and knees turning apart at 0.16–0.18 rad/s, which the
     /// position pass then takes back. Through the figure the solve converges (joint rows within 0.002 rad/s) and the
-    /// hard rows of `afb stress` come to rest 15 % sooner on average, for 16 % more instructions per awake
+    /// hard rows of `afb stress` come to rest 15 % sooner on average, for 17 % more instructions per awake
     /// body-step. Off in every preset (README: Methods, point 20).
     bool frictionThroughFigure = false;
 
