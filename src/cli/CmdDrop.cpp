@@ -111,6 +111,9 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         text::Diagnostics diags;
         auto lib = decl::Library::open(opt->base, diags);
         std::vector<sim::DropResult> results;
+        // The table names each row by its entity, and by the figure too where they differ: entities that share a
+        // figure (humanoid, humanoid_prop, humanoid_sleeping) would otherwise print alike.
+        std::vector<std::string> labels;
         std::vector<std::string> replays; // what --gltf wrote, printed after the table
         std::printf("afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
                     sim::bulletVersion().c_str(), sim::bulletPrecision(), opt->drop.hz,
@@ -132,6 +135,7 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
             sim::DropObserver observer;
             if (!opt->gltf.empty()) observer = sim::recordInto(recording, drop.hz);
             results.push_back(sim::runDrop(loaded->figure, drop, observer));
+            labels.push_back(results.back().figure == e ? e : e + " (" + results.back().figure + ")");
             if (!opt->gltf.empty()) {
                 const sim::GltfReplayResult written =
                     sim::writeGltfReplay(loaded->figure, loaded->mesh, recording, opt->gltf);
@@ -152,11 +156,12 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
         }
         std::fflush(stdout);
         printDiagnostics(diags);
-        std::printf("\n%-32s %6s %7s %9s %9s %10s %9s %9s %9s %9s %9s %8s %8s\n", "figure", "bodies", "steps",
+        std::printf("\n%-32s %6s %7s %9s %9s %10s %9s %9s %9s %9s %9s %8s %8s\n", "entity", "bodies", "steps",
                     "us/step", "us/body", "awake", "anchor m", "limit deg", "pen. m", "rest m", "gain J", "exploded",
                     "settle s");
-        for (const sim::DropResult& r : results) {
-            std::printf("%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", r.figure.c_str(),
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            const sim::DropResult& r = results[i];
+            std::printf("%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", labels[i].c_str(),
                         r.bodies, r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps, r.maxAnchorErrorM,
                         r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
                         r.nonFinite  ? "NaN"
@@ -165,15 +170,15 @@ void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
                         r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
             if (r.exploded) exitCode = 1;
         }
-        for (const sim::DropResult& r : results)
-            if (!r.worstAnchorJoint.empty() || !r.worstLimitJoint.empty())
-                std::printf("  %s: worst anchor at %s, worst limit at %s, deepest contact %s\n", r.figure.c_str(),
+        for (std::size_t i = 0; i < results.size(); ++i)
+            if (const sim::DropResult& r = results[i]; !r.worstAnchorJoint.empty() || !r.worstLimitJoint.empty())
+                std::printf("  %s: worst anchor at %s, worst limit at %s, deepest contact %s\n", labels[i].c_str(),
                             r.worstAnchorJoint.empty() ? "-" : r.worstAnchorJoint.c_str(),
                             r.worstLimitJoint.empty() ? "-" : r.worstLimitJoint.c_str(),
                             r.worstContact.empty() ? "-" : r.worstContact.c_str());
-        for (const sim::DropResult& r : results)
-            if (r.lodBodies)
-                std::printf("  %s: level of detail, %d rigid bodies for %d bodies per instance\n", r.figure.c_str(),
+        for (std::size_t i = 0; i < results.size(); ++i)
+            if (const sim::DropResult& r = results[i]; r.lodBodies)
+                std::printf("  %s: level of detail, %d rigid bodies for %d bodies per instance\n", labels[i].c_str(),
                             *r.lodBodies, r.bodies / std::max(1, opt->drop.count));
         for (const std::string& line : replays) std::printf("%s\n", line.c_str());
         nlohmann::json all = {{"bullet", sim::bulletVersion()},

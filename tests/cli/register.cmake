@@ -50,6 +50,9 @@ afb_cli_test(drop_chain 0 ARGS drop --base . chain --seconds 2 MATCH "chain" "Bu
 afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"steps\": 0" "\"final_pose\"" "\"us_per_step\"")
 afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision double MATCH "\\(double\\)")
 afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
+# Entities that share a figure are told apart in the table: each row names its entity, then the figure.
+afb_cli_test(drop_entity_rows 0 ARGS drop --base . humanoid humanoid_sleeping --steps 1
+             MATCH "humanoid +15 +1 " "humanoid_sleeping \\(humanoid\\) +15 +1 ")
 # afb drop --lod: the humanoid at six rigid bodies, recorded in the report; refused where it cannot apply.
 afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
              MATCH "6 rigid bodies for 15 bodies" "\"lod_bodies\": 6" "\"lod\": 6")
