@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
@@ -208,6 +209,50 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
 
+void Ragdoll::requireRigid(const char* accessor) const {
+    if (m_multibody)
+        throw std::logic_error(std::string("afb::bullet::Ragdoll::") + accessor +
+                               ": the rigid backend's Bullet objects do not exist on a multibody ragdoll (bodyState, "
+                               "collisionObject and applyBodyImpulse serve both backends)");
+}
+
+btRigidBody& Ragdoll::body(int i) {
+    requireRigid("body");
+    return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))];
+}
+const btRigidBody& Ragdoll::body(int i) const {
+    requireRigid("body");
+    return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))];
+}
+btRigidBody& Ragdoll::rigidBody(int k) {
+    requireRigid("rigidBody");
+    return *m_bodies[static_cast<std::size_t>(k)];
+}
+const btRigidBody& Ragdoll::rigidBody(int k) const {
+    requireRigid("rigidBody");
+    return *m_bodies[static_cast<std::size_t>(k)];
+}
+btTypedConstraint* Ragdoll::constraint(int i) {
+    requireRigid("constraint");
+    return m_main[static_cast<std::size_t>(i)];
+}
+const btTypedConstraint* Ragdoll::constraint(int i) const {
+    requireRigid("constraint");
+    return m_main[static_cast<std::size_t>(i)];
+}
+bool Ragdoll::bulletConstraintIsLimit(int k) const {
+    requireRigid("bulletConstraintIsLimit");
+    return m_limitRows[static_cast<std::size_t>(k)];
+}
+btTypedConstraint& Ragdoll::bulletConstraint(int k) {
+    requireRigid("bulletConstraint");
+    return *m_constraints[static_cast<std::size_t>(k)];
+}
+const btTypedConstraint& Ragdoll::bulletConstraint(int k) const {
+    requireRigid("bulletConstraint");
+    return *m_constraints[static_cast<std::size_t>(k)];
+}
+
 int Ragdoll::bodyCount() const {
     return m_multibody ? m_multibody->bodyCount() : static_cast<int>(m_layout->rigidOf.size());
 }
@@ -231,6 +276,14 @@ std::vector<figure::BodyState> Ragdoll::bodyStates() const {
     for (const BodySample& s : samples)
         out.push_back({toEigen(s.transform), toEigen(s.linearVelocity), toEigen(s.angularVelocity)});
     return out;
+}
+
+figure::BodyState Ragdoll::bodyState(int i) const {
+    if (m_multibody) return bodyStates()[static_cast<std::size_t>(i)];
+    const btRigidBody& r = *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))];
+    const btTransform t = r.getCenterOfMassTransform() * bodyInRigid(i);
+    const btVector3 v = r.getVelocityInLocalPoint(t.getOrigin() - r.getCenterOfMassPosition());
+    return {toEigen(t), toEigen(v), toEigen(r.getAngularVelocity())};
 }
 
 std::vector<btTransform> Ragdoll::figureBodyTransforms() const {
@@ -316,20 +369,46 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
     return true;
 }
 
+bool Ragdoll::setBodyVelocities(std::span<const BodyVelocity> velocities) {
+    if (velocities.size() != static_cast<std::size_t>(bodyCount())) return false;
+    if (m_multibody) {
+        std::vector<figure::BodyState> states = bodyStates();
+        for (std::size_t i = 0; i < states.size(); ++i) {
+            states[i].linearVelocity = toEigen(velocities[i].linearMps);
+            states[i].angularVelocity = toEigen(velocities[i].angularRadps);
+        }
+        m_multibody->setBodyStates(states);
+        m_multibody->wake();
+        return true;
+    }
+    for (std::size_t k = 0; k < m_bodies.size(); ++k) {
+        // A merged rigid takes its representative body's motion, carried to its own centre of mass.
+        const std::size_t i = static_cast<std::size_t>(m_layout->rigids[k].representative);
+        btRigidBody& b = *m_bodies[k];
+        const btVector3 w = velocities[i].angularRadps;
+        const btVector3 centre = (b.getCenterOfMassTransform() * bodyInRigid(static_cast<int>(i))).getOrigin();
+        b.setLinearVelocity(velocities[i].linearMps + w.cross(b.getCenterOfMassPosition() - centre));
+        b.setAngularVelocity(w);
+    }
+    wake();
+    return true;
+}
+
 bool Ragdoll::applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint) {
     const std::vector<int>& owners = figure().jointBody;
     if (joint < 0 || static_cast<std::size_t>(joint) >= owners.size()) return false;
     return applyBodyImpulse(owners[static_cast<std::size_t>(joint)], impulse, worldPoint);
 }
 
-bool Ragdoll::applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint) {
-    if (body < 0 || body >= bodyCount() || impulse.length() < impulseThresholdNs()) return false;
+bool Ragdoll::applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint, ImpulseRule rule) {
+    if (body < 0 || body >= bodyCount()) return false;
+    if (rule == ImpulseRule::EngineThreshold && impulse.length() < impulseThresholdNs()) return false;
     if (m_multibody) {
         m_multibody->wake();
         m_multibody->applyImpulse(body, impulse, worldPoint);
         return true;
     }
-    btRigidBody& b = this->body(body);
+    btRigidBody& b = *m_bodies[static_cast<std::size_t>(rigidIndexOf(body))];
     wake();
     b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
     return true;

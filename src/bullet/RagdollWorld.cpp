@@ -57,33 +57,26 @@ constexpr btScalar kReachAllowance = btScalar(1.25);
 // The least gravity the self-contact cap (Method::selfContactCap) scales with, m/s².
 constexpr btScalar kStandardGravityMps2 = btScalar(9.81);
 
-// Guards of the process-wide callback: installed by the first guard that finds it free, removed by the last.
-std::mutex gFrictionMutex;
-int gFrictionGuards = 0;
+// The one write of the process-wide callback (EngineContactFriction::install): done once, never undone.
+std::once_flag gFrictionOnce;
 std::atomic<bool> gFrictionInstalled{false};
 
 } // namespace
 
-EngineContactFriction::EngineContactFriction() {
-    const std::lock_guard lock(gFrictionMutex);
-    if (gContactAddedCallback != nullptr && gContactAddedCallback != &engineContactFriction) return;
-    gContactAddedCallback = &engineContactFriction;
-    gFrictionInstalled = true;
-    ++gFrictionGuards;
-    m_active = true;
-}
+EngineContactFriction::EngineContactFriction() : m_active(install()) {}
 
-EngineContactFriction::~EngineContactFriction() {
-    if (!m_active) return;
-    const std::lock_guard lock(gFrictionMutex);
-    if (--gFrictionGuards == 0) {
-        if (gContactAddedCallback == &engineContactFriction) gContactAddedCallback = nullptr;
-        gFrictionInstalled = false;
-    }
+bool EngineContactFriction::install() {
+    std::call_once(gFrictionOnce, [] {
+        if (gContactAddedCallback != nullptr) return; // the game's own callback stays
+        gContactAddedCallback = &engineContactFriction;
+        gFrictionInstalled.store(true, std::memory_order_release);
+    });
+    return installed();
 }
 
 bool EngineContactFriction::installed() {
-    return gFrictionInstalled && gContactAddedCallback == &engineContactFriction;
+    // The flag's acquire orders this read after the one write; a game that replaced the callback since is seen.
+    return gFrictionInstalled.load(std::memory_order_acquire) && gContactAddedCallback == &engineContactFriction;
 }
 
 WorldParts makeWorld(const Method& method, btDispatcher& dispatcher, btBroadphaseInterface& broadphase,

@@ -252,6 +252,27 @@ bullet::JointError RawRagdoll::jointError(int i) const {
 
 std::vector<figure::Transform> RawRagdoll::bodyTransforms() const { return bullet::bodyTransformsOf(m_bodyList); }
 std::vector<figure::BodyState> RawRagdoll::bodyStates() const { return bullet::bodyStatesOf(m_bodyList); }
+bool RawRagdoll::setBodyVelocities(std::span<const bullet::BodyVelocity> velocities) {
+    if (velocities.size() != m_bodies.size()) return false;
+    for (std::size_t i = 0; i < m_bodies.size(); ++i) {
+        m_bodies[i]->setLinearVelocity(velocities[i].linearMps);
+        m_bodies[i]->setAngularVelocity(velocities[i].angularRadps);
+        m_bodies[i]->activate(true);
+    }
+    return true;
+}
+
+bool RawRagdoll::applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint,
+                                  bullet::ImpulseRule rule) {
+    if (body < 0 || body >= bodyCount()) return false;
+    if (rule == bullet::ImpulseRule::EngineThreshold && impulse.length() < 500.0 * figure().units.metresPerUnit)
+        return false;
+    btRigidBody& b = *m_bodies[static_cast<std::size_t>(body)];
+    b.activate(true);
+    b.applyImpulse(impulse, worldPoint - b.getCenterOfMassPosition());
+    return true;
+}
+
 int RawRagdoll::awakeBodyCount() const { return bullet::awakeCountOf(m_bodyList); }
 bool RawRagdoll::atRest() const { return m_observer->atRest; }
 

@@ -60,7 +60,7 @@ std::string objectLabel(Scene& scene, const std::vector<std::unique_ptr<Doll>>& 
     if (o == scene.ground()) return "ground";
     for (std::size_t k = 0; k < dolls.size(); ++k)
         for (int i = 0; i < dolls[k]->bodyCount(); ++i)
-            if (&dolls[k]->body(i) == o) return bodyLabel(dolls, k, i);
+            if (&dolls[k]->collisionObject(i) == o) return bodyLabel(dolls, k, i);
     return "other";
 }
 
@@ -74,21 +74,19 @@ double totalEnergy(const std::vector<std::unique_ptr<Doll>>& dolls, double g) {
 // Sets every body of an instance to one rigid motion: `v` at the instance's centre of mass and spin `w` about it.
 template <class Doll>
 void setRigidMotion(Doll& d, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+    const std::vector<figure::BodyState> states = d.bodyStates();
     double mass = 0;
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (int i = 0; i < d.bodyCount(); ++i) {
-        const double m = d.figure().bodies[static_cast<std::size_t>(i)].massKg;
+    for (std::size_t i = 0; i < states.size(); ++i) {
+        const double m = d.figure().bodies[i].massKg;
         mass += m;
-        centre += m * bullet::toEigen(d.body(i).getCenterOfMassPosition());
+        centre += m * states[i].pose.position;
     }
     centre /= mass;
-    for (int i = 0; i < d.bodyCount(); ++i) {
-        btRigidBody& b = d.body(i);
-        const Eigen::Vector3d r = bullet::toEigen(b.getCenterOfMassPosition()) - centre;
-        b.setLinearVelocity(bullet::toBt(Eigen::Vector3d(v + w.cross(r))));
-        b.setAngularVelocity(bullet::toBt(w));
-        b.activate(true);
-    }
+    std::vector<bullet::BodyVelocity> velocities;
+    for (const figure::BodyState& s : states)
+        velocities.push_back({bullet::toBt(Eigen::Vector3d(v + w.cross(s.pose.position - centre))), bullet::toBt(w)});
+    [[maybe_unused]] const bool set = d.setBodyVelocities(velocities);
 }
 
 // Potential energy the ground adds when it lifts an instance that spawned inside it out as a whole (work of the
@@ -116,7 +114,7 @@ template <class Doll>
 std::vector<btTransform> framesOf(const std::vector<std::unique_ptr<Doll>>& dolls) {
     std::vector<btTransform> out;
     for (const auto& d : dolls)
-        for (int i = 0; i < d->bodyCount(); ++i) out.push_back(d->body(i).getCenterOfMassTransform());
+        for (const figure::Transform& t : d->bodyTransforms()) out.push_back(bullet::toBt(t));
     return out;
 }
 
@@ -127,10 +125,11 @@ bool stillSince(const std::vector<std::unique_ptr<Doll>>& dolls, const std::vect
     std::size_t n = 0;
     const double turn = th.restTurnDeg * kPi / 180;
     for (const auto& d : dolls)
-        for (int i = 0; i < d->bodyCount(); ++i, ++n) {
-            const btTransform& now = d->body(i).getCenterOfMassTransform();
-            if ((now.getOrigin() - window[n].getOrigin()).length() > th.restMoveM) return false;
-            const btQuaternion dq = window[n].getRotation().inverse() * now.getRotation();
+        for (const figure::Transform& t : d->bodyTransforms()) {
+            const btTransform now = bullet::toBt(t);
+            const btTransform& then = window[n++];
+            if ((now.getOrigin() - then.getOrigin()).length() > th.restMoveM) return false;
+            const btQuaternion dq = then.getRotation().inverse() * now.getRotation();
             if (static_cast<double>(dq.getAngle()) > turn && 2 * kPi - static_cast<double>(dq.getAngle()) > turn)
                 return false;
         }
@@ -171,9 +170,11 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
         judge.now = r.simulatedS = (step + 1) * dt;
         if (!impulseDone && judge.now >= setup.impulse->atS - 1e-9) {
             const double eBefore = totalEnergy(dolls, g);
-            btRigidBody& b = dolls[setup.impulse->instance]->body(setup.impulse->body);
-            b.activate(true);
-            b.applyCentralImpulse(bullet::toBt(setup.impulse->impulseNs));
+            auto& doll = *dolls[setup.impulse->instance];
+            const Eigen::Vector3d centre =
+                doll.bodyStates()[static_cast<std::size_t>(setup.impulse->body)].pose.position;
+            doll.applyBodyImpulse(setup.impulse->body, bullet::toBt(setup.impulse->impulseNs), bullet::toBt(centre),
+                                  bullet::ImpulseRule::Always);
             externalWork += totalEnergy(dolls, g) - eBefore;
             impulseDone = true;
         }

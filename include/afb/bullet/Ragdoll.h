@@ -68,6 +68,18 @@ struct VelocityClamp {
     double maxAngularRadps = 0;
 };
 
+/// A body's velocities: of its centre of mass (m/s) and its spin (rad/s), world.
+struct BodyVelocity {
+    btVector3 linearMps{0, 0, 0};
+    btVector3 angularRadps{0, 0, 0};
+};
+
+/// Which impulses Ragdoll::applyBodyImpulse applies.
+enum class ImpulseRule {
+    EngineThreshold, ///< as the engine: below the wake threshold (Ragdoll::impulseThresholdNs) nothing happens
+    Always,          ///< every impulse, however small
+};
+
 /// Where and how a ragdoll enters a world.
 struct SpawnOptions {
     /// Entity transform: model space (X forward, Y left, Z up, metres) to world.
@@ -111,8 +123,13 @@ inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Me
 /// The backend is the method's (SpawnOptions::method.backend), chosen here once: Backend::Rigid builds one
 /// btRigidBody per body and btTypedConstraints; Backend::Multibody builds btMultiBody trees (reduced coordinates:
 /// tree joints cannot separate) and needs a btMultiBodyDynamicsWorld (with a btMultiBodyConstraintSolver): spawned
-/// into any other world it throws std::invalid_argument. Everything below but body(), constraint() and
-/// bulletConstraint() (the rigid backend's Bullet objects) answers the same way for both.
+/// into any other world it throws std::invalid_argument.
+///
+/// Everything answers the same way for both backends except the accessors of the rigid backend's Bullet objects
+/// (body(), rigidBody(), constraint(), bulletConstraint(), bulletConstraintIsLimit()): on a multibody ragdoll they
+/// throw std::logic_error, since its bodies are links of btMultiBody trees. Code that serves both reads and sets
+/// bodies through bodyState(), bodyStates(), setBodyStates(), setBodyVelocities(), collisionObject() and
+/// applyBodyImpulse().
 class Ragdoll {
   public:
     /// Spawns into a plain world: the method's per-ragdoll knobs apply, the world keeps its own settings and
@@ -148,15 +165,18 @@ class Ragdoll {
     /// transform is the body frame (centre of mass, principal axes).
     btCollisionObject& collisionObject(int i);
     const btCollisionObject& collisionObject(int i) const;
-    /// Rigid body of figure body `i` (rigid backend only); its transform is the body frame (centre of mass,
-    /// principal axes), unless the body was merged with others (Method::mergeFixed, setLod): then it is their compound,
-    /// whose frame is the union's (bodyInRigid(i) places the body in it).
-    btRigidBody& body(int i) { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
-    const btRigidBody& body(int i) const { return *m_bodies[static_cast<std::size_t>(rigidIndexOf(i))]; }
-    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed or setLod.
+    /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes), unless the
+    /// body was merged with others (Method::mergeFixed, setLod): then it is their compound, whose frame is the
+    /// union's (bodyInRigid(i) places the body in it). Rigid backend only: throws std::logic_error on a multibody
+    /// ragdoll (bodyState() and collisionObject() serve both).
+    btRigidBody& body(int i);
+    const btRigidBody& body(int i) const;
+    /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed or setLod;
+    /// 0 for a multibody ragdoll.
     int rigidBodyCount() const { return static_cast<int>(m_bodies.size()); }
-    btRigidBody& rigidBody(int k) { return *m_bodies[static_cast<std::size_t>(k)]; }
-    const btRigidBody& rigidBody(int k) const { return *m_bodies[static_cast<std::size_t>(k)]; }
+    /// Rigid body `k` of rigidBodyCount(); throws std::logic_error on a multibody ragdoll.
+    btRigidBody& rigidBody(int k);
+    const btRigidBody& rigidBody(int k) const;
     /// The rigid body (index for rigidBody) carrying figure body `i`.
     int rigidIndexOf(int i) const { return m_layout->rigidOf[static_cast<std::size_t>(i)]; }
     /// Figure body `i`'s frame in its rigid body's frame (identity unless merged).
@@ -180,16 +200,19 @@ class Ragdoll {
     /// Whether a level of detail is in force.
     bool lodActive() const { return m_lodLayout != nullptr; }
     /// The main Bullet constraint of figure constraint `i` (null for a fixed constraint inside a merged body).
-    btTypedConstraint* constraint(int i) { return m_main[static_cast<std::size_t>(i)]; }
-    const btTypedConstraint* constraint(int i) const { return m_main[static_cast<std::size_t>(i)]; }
-    /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); rigid
-    /// backend only (0 for a multibody ragdoll).
+    /// Rigid backend only: throws std::logic_error on a multibody ragdoll.
+    btTypedConstraint* constraint(int i);
+    const btTypedConstraint* constraint(int i) const;
+    /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); 0 for a
+    /// multibody ragdoll.
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
-    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint).
-    bool bulletConstraintIsLimit(int k) const { return m_limitRows[static_cast<std::size_t>(k)]; }
-    /// Bullet constraint `k` of those, in the order they were added to the world.
-    btTypedConstraint& bulletConstraint(int k) { return *m_constraints[static_cast<std::size_t>(k)]; }
-    const btTypedConstraint& bulletConstraint(int k) const { return *m_constraints[static_cast<std::size_t>(k)]; }
+    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint);
+    /// throws std::logic_error on a multibody ragdoll.
+    bool bulletConstraintIsLimit(int k) const;
+    /// Bullet constraint `k` of those, in the order they were added to the world; throws std::logic_error on a
+    /// multibody ragdoll.
+    btTypedConstraint& bulletConstraint(int k);
+    const btTypedConstraint& bulletConstraint(int k) const;
 
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
     /// space now; at spawn the two coincide.
@@ -213,19 +236,28 @@ class Ragdoll {
     std::vector<figure::Transform> bodyTransforms() const;
     /// World transforms and velocities of every body.
     std::vector<figure::BodyState> bodyStates() const;
+    /// World transform and velocities of figure body `i` (its frame: centre of mass, principal axes), either backend.
+    figure::BodyState bodyState(int i) const;
     /// Figure bodies Bullet is simulating now (not asleep; a merged rigid counts each body it carries).
     int awakeBodyCount() const;
     /// Places every body (one state per body, in body order) and sets its velocities, e.g. from an animation
     /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll. Returns false and changes
     /// nothing when the number of states is not bodyCount().
     [[nodiscard]] bool setBodyStates(std::span<const figure::BodyState> states);
+    /// Sets every body's velocities (one per body, in body order: m/s of its centre of mass and rad/s, world) and
+    /// keeps the poses; wakes the ragdoll. A rigid body that carries merged bodies takes its representative body's
+    /// motion; a multibody ragdoll takes the joint velocities that carry it (as setBodyStates). Returns false and
+    /// changes nothing when the number of velocities is not bodyCount().
+    [[nodiscard]] bool setBodyVelocities(std::span<const BodyVelocity> velocities);
 
     /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints,
     /// §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine units,
     /// 500·metresPerUnit N·s) or on a joint no body contains is ignored: returns false.
     bool applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint);
-    /// The same on figure body `body` (figureBodyOf a ray hit, say); false for a body out of range.
-    bool applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint);
+    /// The same on figure body `body` (figureBodyOf a ray hit, say); false for a body out of range. With
+    /// ImpulseRule::Always the wake threshold does not apply (a scripted push of any size).
+    bool applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint,
+                          ImpulseRule rule = ImpulseRule::EngineThreshold);
     /// Which figure body a ray or contact test hit: `object` one of this ragdoll's collision objects, `worldPoint`
     /// the hit point. A rigid body that carries several merged bodies (Method::mergeFixed, setLod) answers with the
     /// one whose surface is nearest the point. −1 when `object` is not this ragdoll's (a sunk ragdoll's box is not a
@@ -293,6 +325,7 @@ class Ragdoll {
     friend class RagdollWorld;
     void sink(); ///< frozen → out of the world behind one box (sunk())
 
+    void requireRigid(const char* accessor) const; ///< throws std::logic_error for a multibody ragdoll
     btRigidBody& other(int body2) const;
     btTransform frameOfBody2(const figure::FigureConstraint& c) const;
     bool merged() const { return m_layout->rigids.size() != m_layout->rigidOf.size(); }

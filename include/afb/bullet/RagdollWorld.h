@@ -14,19 +14,28 @@ namespace afb::bullet {
 
 class Ragdoll;
 
-/// Keeps Bullet's one process-wide contact-added callback set to the engine's friction combination (af-format
-/// §4.8) while at least one guard lives; ragdoll bodies spawned with SpawnOptions::engineContactFriction then
-/// combine friction as the engine does. Thread-safe; if another callback is installed, active() is false and
+/// The engine's friction combination (af-format §4.8) through Bullet's one process-wide contact-added callback:
+/// ragdoll bodies spawned with SpawnOptions::engineContactFriction then combine friction as the engine does.
+///
+/// The callback is written once per process, by the first install() (every RagdollWorld and every guard calls it),
+/// and never removed: Bullet calls it only for objects flagged CF_CUSTOM_MATERIAL_CALLBACK, and it changes only the
+/// contacts of ragdoll bodies. Every world reads that global in its collision detection, so the one write must not
+/// overlap another thread's step of a world made before it: a game that steps Bullet worlds on several threads calls
+/// install() (or makes its first RagdollWorld) before those threads start. Worlds made and stepped after it never
+/// write it again. If the game installed a callback of its own first, it is left alone: active() is false and
 /// Bullet's product rule stays in force.
 class EngineContactFriction {
   public:
+    /// Installs the callback (see install()).
     EngineContactFriction();
-    ~EngineContactFriction();
     EngineContactFriction(const EngineContactFriction&) = delete;
     EngineContactFriction& operator=(const EngineContactFriction&) = delete;
     /// True when the engine's rule is in force.
     bool active() const { return m_active; }
-    /// True when any guard has the engine's rule in force now (what a ragdoll reports).
+    /// Writes Bullet's contact-added callback unless one is already set; the first call writes it, later calls (on
+    /// any thread) only wait for the first to finish. Returns whether the engine's rule is in force.
+    static bool install();
+    /// True when the engine's rule is in force now (what a ragdoll reports).
     static bool installed();
 
   private:

@@ -93,6 +93,13 @@ class RawRagdoll {
     std::vector<figure::Transform> bodyTransforms() const;
     /// World transforms and velocities of every body.
     std::vector<figure::BodyState> bodyStates() const;
+    /// Sets every body's velocities (one per body, in body order) and activates the bodies; false and nothing
+    /// changed when the count is not bodyCount() (as bullet::Ragdoll::setBodyVelocities).
+    [[nodiscard]] bool setBodyVelocities(std::span<const bullet::BodyVelocity> velocities);
+    /// Applies `impulse` (N·s, world) at `worldPoint` to body `body` and activates it; with ImpulseRule::Always
+    /// whatever its size, else only at or above bullet::Ragdoll's wake threshold. False for a body out of range.
+    bool applyBodyImpulse(int body, const btVector3& impulse, const btVector3& worldPoint,
+                          bullet::ImpulseRule rule = bullet::ImpulseRule::EngineThreshold);
     /// Bodies Bullet is simulating now (not deactivated).
     int awakeBodyCount() const;
     /// True once the figure's rest rules (§6.1) have said the figure is at rest (latched: plain Bullet does not
