@@ -209,6 +209,13 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world,
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
 
+namespace {
+bool finiteState(const figure::BodyState& s) {
+    return s.pose.position.allFinite() && s.pose.rotation.allFinite() && s.linearVelocity.allFinite() &&
+           s.angularVelocity.allFinite();
+}
+} // namespace
+
 void Ragdoll::requireRigid(const char* accessor) const {
     if (m_multibody)
         throw std::logic_error(std::string("afb::bullet::Ragdoll::") + accessor +
@@ -350,6 +357,9 @@ void Ragdoll::placeRigid(btRigidBody& b, const btTransform& t, const btVector3& 
 bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
     if (states.size() != static_cast<std::size_t>(bodyCount())) return false;
     if (m_multibody) {
+        // No explosion guard watches the trees: a non-finite state is refused before Bullet sees it.
+        for (const figure::BodyState& s : states)
+            if (!finiteState(s)) return false;
         m_multibody->setBodyStates(states);
         return true;
     }
@@ -372,6 +382,8 @@ bool Ragdoll::setBodyStates(std::span<const figure::BodyState> states) {
 bool Ragdoll::setBodyVelocities(std::span<const BodyVelocity> velocities) {
     if (velocities.size() != static_cast<std::size_t>(bodyCount())) return false;
     if (m_multibody) {
+        for (const BodyVelocity& v : velocities)
+            if (!std::isfinite(v.linearMps.length2()) || !std::isfinite(v.angularRadps.length2())) return false;
         std::vector<figure::BodyState> states = bodyStates();
         for (std::size_t i = 0; i < states.size(); ++i) {
             states[i].linearVelocity = toEigen(velocities[i].linearMps);

@@ -242,12 +242,13 @@ class Ragdoll {
     int awakeBodyCount() const;
     /// Places every body (one state per body, in body order) and sets its velocities, e.g. from an animation
     /// (figure::bodiesFromJoints, figure::inheritVelocities); wakes the ragdoll. Returns false and changes
-    /// nothing when the number of states is not bodyCount().
+    /// nothing when the number of states is not bodyCount(). A non-finite state reaches the explosion guard of a
+    /// rigid ragdoll (it trips before the next step); a multibody ragdoll refuses it (false).
     [[nodiscard]] bool setBodyStates(std::span<const figure::BodyState> states);
     /// Sets every body's velocities (one per body, in body order: m/s of its centre of mass and rad/s, world) and
     /// keeps the poses; wakes the ragdoll. A rigid body that carries merged bodies takes its representative body's
     /// motion; a multibody ragdoll takes the joint velocities that carry it (as setBodyStates). Returns false and
-    /// changes nothing when the number of velocities is not bodyCount().
+    /// changes nothing when the number of velocities is not bodyCount() (or, multibody, one is not finite).
     [[nodiscard]] bool setBodyVelocities(std::span<const BodyVelocity> velocities);
 
     /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints,
