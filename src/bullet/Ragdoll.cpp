@@ -1,4 +1,4 @@
-// Spawning a figure into a Bullet world: af-format §4 (constraint mapping), §4.7 (springs), §4.8 (friction),
+// Spawning a figure into a Bullet world: docs/format.md §4 (constraint mapping), §4.7 (springs), §4.8 (friction),
 // §6.2 (collision filtering).
 #include "afb/bullet/Ragdoll.h"
 
@@ -21,7 +21,7 @@ using figure::FigureConstraint;
 using figure::JointType;
 
 // Per-step work of a ragdoll: the joint friction bounds follow each joint's reaction force of the step just
-// solved (af-format §4.8), and the rest rules (§6.1) decide when the figure sleeps.
+// solved (docs/format.md §4.8), and the rest rules (§6.1) decide when the figure sleeps.
 class Ragdoll::Action : public btActionInterface {
   public:
     struct Friction {

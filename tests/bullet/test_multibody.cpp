@@ -83,7 +83,7 @@ double kineticEnergy(const Figure& f, const Ragdoll& r) {
 }
 
 // The twist of a universal joint's body-2 frame relative to its body-1 frame about shaft 1 (their X axes), rad:
-// §4.4's joint keeps it at zero (no relative spin about the shafts).
+// docs/format.md §4.4's joint keeps it at zero (no relative spin about the shafts).
 double twistRad(const Ragdoll& r, int c) {
     const auto [f1, f2] = r.constraintFramesWorld(c);
     btQuaternion q;

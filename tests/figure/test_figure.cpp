@@ -1,4 +1,4 @@
-// figure::buildFigure against the spec (af-format §0, §1.2, §1.7, §1.8, §2.2–§2.4, §3.1–§3.4, §4.1–§4.7, §5.3,
+// figure::buildFigure against the spec (docs/format.md §0, §1.2, §1.7, §1.8, §2.2–§2.4, §3.1–§3.4, §4.1–§4.7, §5.3,
 // §6.2, §8) and the findings the issue asks for. Expected values are worked out by hand from the spec, not from
 // the code under test; figures are built from inline `.af` text on hand-made skeletons (identity orientations).
 #include <catch2/catch.hpp>
@@ -158,7 +158,7 @@ std::pair<Transform, Transform> framesModel(const Figure& f, const FigureConstra
     return {a, b};
 }
 
-// The engine's distortion of a rotation angle about a non-unit axis of length L (af-format §4.5).
+// The engine's distortion of a rotation angle about a non-unit axis of length L (docs/format.md §4.5).
 double g(double thetaRad, double length) {
     return std::atan2(length * std::sin(thetaRad), 1.0 - length * length * (1.0 - std::cos(thetaRad)));
 }

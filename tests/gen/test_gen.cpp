@@ -112,7 +112,7 @@ TEST_CASE("gen: a rig written as md5mesh + af_pose reads back with the same join
             CHECK(a.influences[k].weight == Approx(b.influences[k].weight).margin(1e-12));
         }
     }
-    // The af_pose's load pose is the bind pose (the model offset puts the root back, af-format §2.1).
+    // The af_pose's load pose is the bind pose (the model offset puts the root back, docs/format.md §2.1).
     const auto skeleton = afb::figure::Skeleton::build(*mesh, *anim, rig.joints[0].bind.position, diags, "test");
     REQUIRE(skeleton);
     for (std::size_t j = 0; j < rig.joints.size(); ++j) {
@@ -334,7 +334,7 @@ std::optional<ZsecComparison> compareZsec(const fs::path& corpus, const std::str
     c.handMassKg = h.totalMassKg;
     c.genMassKg = g.totalMassKg;
     // The generated figure is built on the bind pose; the hand-made one on the zsec af_pose (arms and legs spread):
-    // the generated bodies are put in the af_pose through their joints (af-format §2.5) before comparing.
+    // the generated bodies are put in the af_pose through their joints (docs/format.md §2.5) before comparing.
     if (g.skeleton.jointCount() != h.skeleton.jointCount()) return std::nullopt;
     const auto genBodies = afb::figure::bodiesFromJoints(g, {}, afb::figure::jointsInMetres(h));
     std::vector<Eigen::Vector3d> genCentres;

@@ -53,8 +53,8 @@ TEST_CASE("a spring far past its maxLength on a long lever simulates finite and 
     CHECK(findings.str().find("spring 'cone_bone': no anchor2") != std::string::npos);
     CHECK(findings.str().find("above maxLength") != std::string::npos);
 
-    // The energy the figure can release: the quadratic spring's k·x³/3 at its load length (§4.7), and every
-    // body's centre of mass falling to the ground plane.
+    // The energy the figure can release: the quadratic spring's k·x³/3 at its load length (docs/format.md §4.7), and
+    // every body's centre of mass falling to the ground plane.
     const afb::figure::Figure& f = *figure;
     double available = 0;
     for (const afb::figure::FigureConstraint& c : f.constraints) {

@@ -126,7 +126,8 @@ TEST_CASE("stress: +rest runs the figures under their own rest rules, as a game 
     CHECK_FALSE(sim::parseStressMethod("default+sleep", error));
     CHECK(error.find("+rest") != std::string::npos);
     // The 15 Hz drop settles slowly by the matrix's own measure (nothing moving 10 mm or 2° over a second); the
-    // figure's rest rules (§6.1: noMoveTime 1 s, with the humanoid's looser bounds) put it to sleep much sooner.
+    // figure's rest rules (docs/format.md §6.1: noMoveTime 1 s, with the humanoid's looser bounds) put it to
+    // sleep much sooner.
     const sim::StressSetup s = setupOf("humanoid-15hz", bundled());
     const sim::StressResult measured = sim::runStress(s, method("default"));
     const sim::StressResult rules = sim::runStress(s, method("default+rest"));
