@@ -128,7 +128,7 @@ Method iterativeJoints(Method method) {
 
 namespace {
 
-// The iterative solve (the default until session 15): Bullet's sequential impulse over the joint rows, one
+// The iterative solve (the previous default): Bullet's sequential impulse over the joint rows, one
 // friction direction, the sweeps alone as the position pass.
 Method iterative(std::string_view name) {
     Method m = iterativeJoints(Method{});
@@ -155,7 +155,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         return m;
     }
     if (name == "iterative") {
-        // The default until session 15, and what a world without a RagdollSolver runs (methodInForce).
+        // The previous default, and what a world without a RagdollSolver runs (methodInForce).
         return iterative(name);
     }
     if (name == "fast") {
@@ -180,7 +180,7 @@ std::optional<Method> methodPreset(std::string_view name) {
     }
     if (name == "default" || name == "exact") {
         // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
-        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced (session 15)
+        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced
         // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
         // 10 m for 0.94× this cost's predecessor (README: Methods). The velocity-exact joints still drift at the
         // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without

@@ -1,4 +1,4 @@
-// Levels of detail of a live ragdoll (issue 12): its bodies merged into fewer rigid bodies and back, at the pose
+// Levels of detail of a live ragdoll: its bodies merged into fewer rigid bodies and back, at the pose
 // and momentum they have, so that nothing moves at the switch (README: Economy).
 #include <algorithm>
 

@@ -51,7 +51,7 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
     struct Options {
         std::filesystem::path base = ".";
         std::vector<std::string> entities;
-        // exact is the default since session 15; the iterative default it replaced stays on the front.
+        // exact is the default; the iterative default it replaced stays on the front.
         std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
         sim::ChartOptions chart;
         std::filesystem::path out = "chart";

@@ -1,4 +1,4 @@
-// The one scene (ARCHITECTURE.md: src/sim): Bullet's default collision parts, the sequential-impulse solver,
+// The one scene (docs/architecture.md: src/sim): Bullet's default collision parts, the sequential-impulse solver,
 // the method's world-level knobs through bullet::RagdollWorld.
 #include "afb/sim/Scene.h"
 

@@ -1,4 +1,4 @@
-// Economy (issue 12): pairs pruned once per figure never touch within the limits.
+// Economy: pairs pruned once per figure never touch within the limits.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

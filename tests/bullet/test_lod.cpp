@@ -1,4 +1,4 @@
-// Economy (issue 12): levels of detail, bodies merged into fewer rigid bodies and back at runtime.
+// Economy: levels of detail, bodies merged into fewer rigid bodies and back at runtime.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

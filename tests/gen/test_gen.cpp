@@ -1,4 +1,4 @@
-// afb gen (issue 14): rigs in and out of md5, rules, defensive import, and generated figures judged against the
+// afb gen: rigs in and out of md5, rules, defensive import, and generated figures judged against the
 // hand-made zsec figures and on the assimp rigs of the corpus (skipped when ../shared/data is absent).
 #include <catch2/catch.hpp>
 
@@ -479,7 +479,7 @@ std::optional<RigResult> runRig(const fs::path& corpus, const RigCase& c, std::s
 
 } // namespace
 
-// The rigs the issue names: each generates a figure that passes the checks, spawns exactly in its bind pose and
+// The corpus rigs: each generates a figure that passes the checks, spawns exactly in its bind pose and
 // settles from a 1 m drop. quad_skin's armature is scaled 100 in a metre file (200 m): it is generated 1 m tall.
 TEST_CASE("gen: the corpus rigs spawn in their bind pose and settle", "[gen][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);
