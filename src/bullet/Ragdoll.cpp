@@ -379,7 +379,7 @@ void Ragdoll::putToRest() {
 // bodies become static objects in the StaticFilter group that test no pairs against static objects (so neither
 // against the ground nor each other nor other resting ragdolls), until the world sees a contact with an active
 // body (RagdollWorld) or the ragdoll is woken. Bullet's own sleeping leaves every sleeping body and constraint in
-// its per-step loops, its island sort, and its pairs with the ground (README: Economy).
+// its per-step loops, its island sort, and its pairs with the ground (docs/performance.md).
 void Ragdoll::freezeBodies() {
     if (m_frozen) return;
     m_frozen = true;

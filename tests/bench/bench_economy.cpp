@@ -72,7 +72,7 @@ std::vector<Labelled> methods() {
             {"fast", *afb::bullet::methodPreset("fast")}};
 }
 
-/// The floor under any method on Bullet's solver (README: Economy): `fast` without the position pass, speculative
+/// The floor under any method on Bullet's solver (docs/performance.md): `fast` without the position pass, speculative
 /// limits and contacts and full manifolds, i.e. Bullet's 20 iterations over the merged figure, on afbullet's
 /// solver (warm-started joints, SSE row updates). Dropped only (BM_Drop/floor): a measure of the solver, not a
 /// method anyone would choose for accuracy.

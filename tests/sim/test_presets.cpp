@@ -1,4 +1,4 @@
-// Accuracy regression per method preset (README "Methods"): deterministic drops of the bundled humanoid with
+// Accuracy regression per method preset (docs/methods.md): deterministic drops of the bundled humanoid with
 // bounds on the metrics, and every bundled figure dropped with the default method without exploding.
 // The bounds sit above what each preset measures today and below what the next cheaper one gives, so a change
 // that loses a preset's accuracy fails here (timings are never asserted).

@@ -190,7 +190,7 @@ TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim
     }
 }
 
-// The CI subset: the default method passes every row of it (the full matrix: afb stress, README "Stability").
+// The CI subset: the default method passes every row of it (the full matrix: afb stress, docs/stability.md).
 TEST_CASE("position tree: a step that leaves more error than it found is not taken", "[sim][stress]") {
     // The 30-link rope of 10 cm links, nearly straight under its own weight: the mass-weighted Newton step closes
     // its 1 mm gaps by turning links 0.3 rad one way and the next the other, and the second-order rest (2–5 mm)
