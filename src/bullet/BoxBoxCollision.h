@@ -5,7 +5,7 @@
 // ragdoll manifold's threshold to the distance its bodies can close in a substep). This algorithm runs Bullet's
 // detector while the boxes overlap (its up-to-four clipped points, as before) and, while they are apart, adds
 // GJK's closest points within the manifold's reach, as Bullet's convex–convex algorithm does for hulls
-// (README: Methods, "box–box speculative contacts").
+// (docs/methods.md, speculative contacts).
 #include <btBulletCollisionCommon.h>
 
 namespace afb::bullet::detail {

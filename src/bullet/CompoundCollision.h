@@ -6,7 +6,7 @@
 // child touch whatever the compound may touch (a hand that never collides with its own figure does, once merged
 // with a forearm that does). This algorithm widens each child's test by the pair's speculative reach, gives each
 // child against a convex object a manifold of its own with that reach from the first step, and lets a child touch a
-// body of its own ragdoll only where the figure's self-collision pairs allow it (README: Economy).
+// body of its own ragdoll only where the figure's self-collision pairs allow it (docs/performance.md).
 #include <memory>
 
 #include <btBulletCollisionCommon.h>

@@ -47,7 +47,7 @@ int directionLimitRows(const btVector3& s, const btMatrix3x3& basis, LimitShape 
         }
         return n;
     }
-    // af-format §4.3: planar angles of the shaft in span(f, l) and span(f, u); their rates are derived from
+    // docs/format.md §4.3: planar angles of the shaft in span(f, l) and span(f, u); their rates are derived from
     // d(atan2(y, x))/dt with ds/dt = (ωA − ωB) × s, so the Jacobians are exact, not small-angle.
     const btScalar sf = s.dot(f), sl = s.dot(l), su = s.dot(u);
     const btScalar r1 = sf * sf + sl * sl, r2 = sf * sf + su * su;

@@ -2,7 +2,7 @@
 // Contacts between a polytope (convex hull or box) and a static plane from every vertex within the manifold's reach,
 // instead of Bullet's single supporting vertex (plus perturbed copies of it). A tilted body then has contact
 // points on the far side of its tipping edge before it rolls onto them, so a speculative contact can stop the
-// roll (README: Methods, "a foot slapping through the ground").
+// roll (docs/methods.md, speculative contacts).
 #include <btBulletCollisionCommon.h>
 
 namespace afb::bullet::detail {

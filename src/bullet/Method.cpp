@@ -1,4 +1,4 @@
-// Methods: the knob table and the named presets (README "Methods" has the measurements behind each preset).
+// Methods: the knob table and the named presets (docs/methods.md has the measurements behind each preset).
 #include "afb/bullet/Method.h"
 
 #include <array>
@@ -107,7 +107,7 @@ std::string_view toString(CcdPolicy c) { return c == CcdPolicy::Off ? "off" : "f
 
 std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 
-// The presets (README "Methods" gives their measured numbers and the root causes behind each knob):
+// The presets (docs/methods.md gives their measured numbers and the reason for each knob):
 //  - every preset solves contacts as many times as joints (a joint solved after the contacts stop pushes light
 //    feet into the ground), fills contact manifolds at first touch, keeps speculative contacts and limit rows
 //    (without them, three of the four figures of the 10 m drop exceed the 0.1 m anchor bound) and runs the
@@ -116,7 +116,7 @@ std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 //    vertices;
 //  - the default (and exact, the same method) solves the joints directly; fast and accurate are Bullet's iterative
 //    solve with our rows, differing in substeps (the lever that cuts impact error most per unit of cost);
-//  - fast, default and exact merge fixed joints into one body (Method::mergeFixed; README: Economy).
+//  - fast, default and exact merge fixed joints into one body (Method::mergeFixed; docs/performance.md).
 Method iterativeJoints(Method method) {
     method.directJoints = false;
     method.positionTree = 0;
@@ -128,7 +128,7 @@ Method iterativeJoints(Method method) {
 
 namespace {
 
-// The iterative solve (the default until session 15): Bullet's sequential impulse over the joint rows, one
+// The iterative solve (the previous default): Bullet's sequential impulse over the joint rows, one
 // friction direction, the sweeps alone as the position pass.
 Method iterative(std::string_view name) {
     Method m = iterativeJoints(Method{});
@@ -155,7 +155,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         return m;
     }
     if (name == "iterative") {
-        // The default until session 15, and what a world without a RagdollSolver runs (methodInForce).
+        // The previous default, and what a world without a RagdollSolver runs (methodInForce).
         return iterative(name);
     }
     if (name == "fast") {
@@ -170,7 +170,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.substeps = 2;
         m.jointIterations = 0; // the world's 20
         // The constant-velocity universal joint: stress 124 → 135 of 136 runs, humanoid rows at 24 yaws 150 → 188
-        // of 192 (README: Stability).
+        // of 192 (docs/stability.md).
         m.constantVelocityUniversal = true;
         m.positionIterations = 2;
         // Merged, a humanoid's forearm went into its torso at the 1 m drop (right shoulder 15.5 mm / 8.5° against
@@ -180,7 +180,7 @@ std::optional<Method> methodPreset(std::string_view name) {
     }
     if (name == "default" || name == "exact") {
         // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
-        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced (session 15)
+        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced
         // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
         // 10 m for 0.94× this cost's predecessor (README: Methods). The velocity-exact joints still drift at the
         // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without

@@ -1,4 +1,4 @@
-// The reduced-coordinate backend (Multibody.h): af-format §4 joints as btMultiBody links, §4.3/§4.5 limits as
+// The reduced-coordinate backend (Multibody.h): docs/format.md §4 joints as btMultiBody links, §4.3/§4.5 limits as
 // our own btMultiBodyConstraint rows, §6.1 rest, §6.2 collision filtering.
 #include "Multibody.h"
 
@@ -329,7 +329,7 @@ void relativeJacobian(btMultiBody& tree, int linkA, const btVector3& pointA, std
     for (std::size_t k = 0; k < ndof; ++k) jac[k] -= scratch[k];
 }
 
-// Joint friction (af-format §4.8) on a joint within one tree: rows resisting the relative angular velocity of the
+// Joint friction (docs/format.md §4.8) on a joint within one tree: rows resisting the relative angular velocity of the
 // two bodies about the free axes (ball 3, universal 2 perpendicular to shaft 1, hinge 1), target velocity 0, each
 // impulse bounded by `maxImpulse` per step (MultibodyRagdoll sets it from the joint's reaction force as the rigid
 // backend's JointFrictionConstraint).
@@ -384,7 +384,7 @@ class JointFriction : public btMultiBodyConstraint {
     std::vector<btScalar> m_jac, m_scratch;
 };
 
-// A spring (af-format §4.7) between anchors fixed in two bodies (of one tree, of two trees, or one body and the
+// A spring (docs/format.md §4.7) between anchors fixed in two bodies (of one tree, of two trees, or one body and the
 // world): the rigid backend's SpringConstraint law (the quadratic force minus the damping term, each step's
 // impulse bounded by what closes the whole deviation or stops the relative motion in that step) as a row whose
 // impulse is pinned to F·dt, so it is integrated inside the solver step where gravity is; plus the one-sided

@@ -103,8 +103,8 @@ class MultibodyRagdoll {
     void build(const SpawnOptions& options);
     void addColliders(const SpawnOptions& options);
     void addConstraints(const Method& method);
-    /// §4.8 joint friction rows on figure constraint `ci` if it has friction (`loop`: its constraint when it is
-    /// not a tree edge, whose applied impulses are the reaction; else the reaction of the child's subtree).
+    /// docs/format.md §4.8 joint friction rows on figure constraint `ci` if it has friction (`loop`: its constraint
+    /// when it is not a tree edge, whose applied impulses are the reaction; else the reaction of the child's subtree).
     void addFriction(int ci, btMultiBodyConstraint* loop);
     /// §4.7: the spring between the two bodies' anchors (frames' origins, body frames; world for the world).
     void addSpring(const figure::FigureConstraint& c, const btTransform& fa, const btTransform& fb);

@@ -1,5 +1,5 @@
 #pragma once
-// Self-collision pairs the figure's joints keep apart (issue 12, "only the pairs that can touch"): computed once
+// Self-collision pairs the figure's joints keep apart ("only the pairs that can touch"): computed once
 // per figure, by RagdollAsset.
 #include <utility>
 #include <vector>

@@ -1,4 +1,4 @@
-// The measurements every ragdoll representation shares: joint errors and the rest rules (af-format §6.1).
+// The measurements every ragdoll representation shares: joint errors and the rest rules (docs/format.md §6.1).
 #include "afb/bullet/Probes.h"
 
 #include "afb/bullet/Convert.h"
@@ -87,7 +87,7 @@ int awakeCountOf(BodyList bodies) {
     return n;
 }
 
-// af-format §6.1 TestIfAtRest, over any list of bodies: `get(i)` gives body i's BodySample.
+// docs/format.md §6.1 TestIfAtRest, over any list of bodies: `get(i)` gives body i's BodySample.
 template <class Get>
 bool RestTest::updateWith(std::size_t count, const Get& get, double dt, double activeTime) {
     const figure::RestRules& r = m_rules;

@@ -1,4 +1,4 @@
-// Spawning a figure into a Bullet world: af-format §4 (constraint mapping), §4.7 (springs), §4.8 (friction),
+// Spawning a figure into a Bullet world: docs/format.md §4 (constraint mapping), §4.7 (springs), §4.8 (friction),
 // §6.2 (collision filtering).
 #include "afb/bullet/Ragdoll.h"
 
@@ -22,7 +22,7 @@ using figure::FigureConstraint;
 using figure::JointType;
 
 // Per-step work of a ragdoll: the joint friction bounds follow each joint's reaction force of the step just
-// solved (af-format §4.8), and the rest rules (§6.1) decide when the figure sleeps.
+// solved (docs/format.md §4.8), and the rest rules (§6.1) decide when the figure sleeps.
 class Ragdoll::Action : public btActionInterface {
   public:
     struct Friction {
@@ -470,7 +470,7 @@ void Ragdoll::putToRest() {
 // bodies become static objects in the StaticFilter group that test no pairs against static objects (so neither
 // against the ground nor each other nor other resting ragdolls), until the world sees a contact with an active
 // body (RagdollWorld) or the ragdoll is woken. Bullet's own sleeping leaves every sleeping body and constraint in
-// its per-step loops, its island sort, and its pairs with the ground (README: Economy).
+// its per-step loops, its island sort, and its pairs with the ground (docs/performance.md).
 void Ragdoll::freezeBodies() {
     if (m_frozen) return;
     m_frozen = true;

@@ -1,5 +1,5 @@
-// Levels of detail of a live ragdoll (issue 12): its bodies merged into fewer rigid bodies and back, at the pose
-// and momentum they have, so that nothing moves at the switch (README: Economy).
+// Levels of detail of a live ragdoll: its bodies merged into fewer rigid bodies and back, at the pose
+// and momentum they have, so that nothing moves at the switch (docs/performance.md).
 #include <algorithm>
 
 #include <Eigen/Dense>

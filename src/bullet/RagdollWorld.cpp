@@ -28,7 +28,7 @@ bool isEngineFrictionBody(const btCollisionObject* o) {
 }
 bool isSpeculativeBody(const btCollisionObject* o) { return o->getUserIndex2() == kSpeculativeFrictionMarker; }
 
-// af-format §4.8: min(f1, f2) between two ragdoll bodies, the ragdoll body's own value against anything else.
+// docs/format.md §4.8: min(f1, f2) between two ragdoll bodies, the ragdoll body's own value against anything else.
 bool engineContactFriction(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int,
                            const btCollisionObjectWrapper* w1, int, int) {
     const btCollisionObject* a = w0->getCollisionObject();

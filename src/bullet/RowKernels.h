@@ -7,7 +7,7 @@
 // still sums (x + y) + z and every vector product keeps Bullet's association. Only the w lane of the bodies'
 // vectors is left as it was (Bullet's scalar code never writes it).
 //
-// RagdollSolver runs its iterations on these (README: Economy); tests/bullet/test_row_kernels.cpp compares them
+// RagdollSolver runs its iterations on these (docs/performance.md); tests/bullet/test_row_kernels.cpp compares them
 // with Bullet's own scalar functions on random rows.
 #include <BulletDynamics/ConstraintSolver/btSolverBody.h>
 #include <BulletDynamics/ConstraintSolver/btSolverConstraint.h>

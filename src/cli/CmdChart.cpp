@@ -47,11 +47,11 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
                 "Methods: a preset or raw (plain Bullet), optionally with knob overrides: NAME[:KNOB=VALUE]..., e.g. "
                 "raw:substeps=4 or default:position-iterations=8 (knobs as in afb drop --help).\n"
                 "Cost: thread CPU time inside the steps per awake body-step (median of the repeats, min-max shown). "
-                "Instruction counts: README, 'afb chart'.");
+                "Instruction counts: docs/performance.md.");
     struct Options {
         std::filesystem::path base = ".";
         std::vector<std::string> entities;
-        // exact is the default since session 15; the iterative default it replaced stays on the front.
+        // exact is the default; the iterative default it replaced stays on the front.
         std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
         sim::ChartOptions chart;
         std::filesystem::path out = "chart";

@@ -1,4 +1,4 @@
-// afb gen MODEL --out DIR: a ragdoll figure from a rigged mesh (issue 14), written as a content folder.
+// afb gen MODEL --out DIR: a ragdoll figure from a rigged mesh, written as a content folder.
 #include <cctype>
 #include <cerrno>
 #include <cstdio>

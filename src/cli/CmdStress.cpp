@@ -91,7 +91,7 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
                 "with entity 'humanoid'); without it they are skipped.");
     struct Options {
         std::filesystem::path base = ".";
-        // exact is the default since session 15; the iterative default it replaced stays on the front. Every
+        // exact is the default; the iterative default it replaced stays on the front. Every
         // method is judged on its physics alone; default+rest is the default as the library spawns a ragdoll
         // (SpawnOptions::comeToRest, the engine's rest rules), the verdict a game sees.
         std::vector<std::string> methods = {"raw",     "legacy",       "fast",    "iterative",

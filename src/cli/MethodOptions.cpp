@@ -8,7 +8,7 @@ void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& optio
     std::string presets;
     for (std::string_view p : sim::methodNames()) presets += (presets.empty() ? "" : ", ") + std::string(p);
     cmd->add_option("--method", options->preset,
-                    "How figures are simulated: " + presets + " (README: Methods; raw: plain Bullet, the reference)")
+                    "How figures are simulated: " + presets + " (docs/methods.md; raw: plain Bullet, the reference)")
         ->capture_default_str();
     const auto knobs = bullet::methodKnobs();
     options->overrides.assign(knobs.size(), std::string());

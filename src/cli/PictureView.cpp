@@ -146,7 +146,7 @@ void drawPyramid(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, c
     cairo_stroke(cr);
 }
 
-// A hinge: the sector φ ∈ [lower, upper] about frame2's Z from its X (§4.5), and the axis itself.
+// A hinge: the sector φ ∈ [lower, upper] about frame2's Z from its X (docs/format.md §4.5), and the axis itself.
 void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transform& frame2, const figure::HingeRange& h,
                   double radius) {
     const Vector3d o = frame2.position, x = frame2.rotation.col(0), y = frame2.rotation.col(1);

@@ -22,7 +22,7 @@ std::uint32_t contentsBits(const ContentsList& list, std::optional<std::size_t>*
         const std::optional<std::uint32_t> b = contentsBitsOfName(list.names[i]);
         if (!b) {
             if (firstUnknown) *firstUnknown = i;
-            break; // af-format §1.6: the first unknown name ends the list
+            break; // docs/format.md §1.6: the first unknown name ends the list
         }
         bits = (*b == 0) ? 0 : (bits | *b);
     }

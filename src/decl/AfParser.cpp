@@ -1,4 +1,4 @@
-// `.af` parser: af-format §1. Keys and block keywords are case-insensitive; vector keywords are not.
+// `.af` parser: docs/format.md §1. Keys and block keywords are case-insensitive; vector keywords are not.
 #include "afb/decl/AfParser.h"
 
 #include <map>
@@ -77,7 +77,7 @@ class AfParser {
         return std::string(t.text);
     }
 
-    // idAFVector::Parse (af-format §1.2).
+    // idAFVector::Parse (docs/format.md §1.2).
     AfVector parseVector(std::string_view what) {
         AfVector v;
         Token t = m_lex.expectToken(what);
@@ -127,7 +127,7 @@ class AfParser {
 
     std::string parseQuoted(std::string_view what) { return m_lex.expectString(what); }
 
-    // --- settings (af-format §1.3) -----------------------------------------------------------------------
+    // --- settings (docs/format.md §1.3) -----------------------------------------------------------------------
 
     AfSettings parseSettings(const Token& keyword) {
         AfSettings s;
@@ -171,7 +171,7 @@ class AfParser {
         return s;
     }
 
-    // --- bodies (af-format §1.4, §1.5) ---------------------------------------------------------------------
+    // --- bodies (docs/format.md §1.4, §1.5) ---------------------------------------------------------------------
 
     AfShape parseShape() {
         AfShape shape;
@@ -262,7 +262,7 @@ class AfParser {
         return b;
     }
 
-    // --- constraints (af-format §1.7) ------------------------------------------------------------------------
+    // --- constraints (docs/format.md §1.7) ------------------------------------------------------------------------
 
     AfConstraint parseConstraint(const Token& keyword, ConstraintType type) {
         AfConstraint c;
@@ -352,7 +352,7 @@ class AfParser {
         m_lex.fail(t, "unknown token " + t.describe() + " in " + where + hint);
     }
 
-    // af-format §1.8: duplicate names. Exact duplicates are errors (the engine logs one); names that differ only
+    // docs/format.md §1.8: duplicate names. Exact duplicates are errors (the engine logs one); names that differ only
     // in case are warnings here, because the engine's case-insensitive lookups merge them at load.
     void checkNames(const AfDecl& decl) {
         auto check = [&](const auto& items, const char* what) {

@@ -33,7 +33,7 @@ std::size_t aliasEnd(std::string_view name) {
     return i;
 }
 
-// The statements a model decl accepts (af-format §7.1), for the unknown-keyword message.
+// The statements a model decl accepts (docs/format.md §7.1), for the unknown-keyword message.
 constexpr const char* kModelKeywords = "inherit, skin, mesh, offset, channel, anim, remove";
 
 // One `.def` file: the decl scan is DeclFile's; this reads the bodies of entityDef and model decls.
@@ -74,7 +74,7 @@ class DefParser {
         return {t, std::string(t.text)};
     }
 
-    // idDeclEntityDef::Parse: quoted key, then any value token, until '}' (af-format §7.2).
+    // idDeclEntityDef::Parse: quoted key, then any value token, until '}' (docs/format.md §7.2).
     EntityDef parseEntityDef(const detail::DeclHeader& header) {
         EntityDef def;
         def.name = header.name;
@@ -104,7 +104,7 @@ class DefParser {
         return def;
     }
 
-    // idDeclModelDef::Parse (af-format §7.1). Keywords are case-sensitive and may be quoted.
+    // idDeclModelDef::Parse (docs/format.md §7.1). Keywords are case-sensitive and may be quoted.
     ModelDef parseModel(const detail::DeclHeader& header) {
         ModelDef model;
         model.name = header.name;

@@ -223,7 +223,7 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::
         current = &parent->decl;
     }
 
-    // Apply from the root down, as each CopyDecl + statements would (af-format §7.1).
+    // Apply from the root down, as each CopyDecl + statements would (docs/format.md §7.1).
     ModelDef& flat = result.model;
     flat.name = leaf->decl.name;
     flat.location = leaf->decl.location;
@@ -389,7 +389,7 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::
     return true;
 }
 
-// The model decl, its mesh and its af_pose (af-format §7.1).
+// The model decl, its mesh and its af_pose (docs/format.md §7.1).
 bool Library::resolveEntityModel(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const {
     const std::string where = "entityDef '" + entity.name + "'";
     const std::optional<std::string> modelKey = nonEmpty(r.get("model"));
@@ -442,7 +442,7 @@ bool Library::resolveAfPose(ResolvedEntity& r, text::Diagnostics& diagnostics) c
     return true;
 }
 
-// The figure (af-format §7.2): idAFEntity_Base reads "articulatedFigure", idActor reads "ragdoll"; idAF::Load
+// The figure (docs/format.md §7.2): idAFEntity_Base reads "articulatedFigure", idActor reads "ragdoll"; idAF::Load
 // strips any extension before looking the decl up.
 bool Library::resolveEntityFigure(const EntityDef& entity, ResolvedEntity& r, text::Diagnostics& diagnostics) const {
     const std::string where = "entityDef '" + entity.name + "'";

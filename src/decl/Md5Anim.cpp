@@ -27,7 +27,7 @@ constexpr std::size_t kMinFrameBytes = 23; // `(0 0 0)(0 0 0)` in bounds plus `f
 using detail::quotedName;
 using detail::reserveFor;
 
-// af-format §7.4: a fixed sequence of sections, each with exactly the announced number of entries.
+// docs/format.md §7.4: a fixed sequence of sections, each with exactly the announced number of entries.
 class AnimParser : detail::Md5ParserBase {
   public:
     AnimParser(std::string_view source, const std::string& fileName, text::Diagnostics& diagnostics)
@@ -197,7 +197,7 @@ std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh&
     for (std::size_t i = 0; i < mesh.joints.size(); ++i) {
         const Md5HierarchyEntry& a = anim.hierarchy[i];
         const Md5Joint& m = mesh.joints[i];
-        if (a.name != m.name) // case-sensitive, unlike joint lookups (af-format §8 item 1)
+        if (a.name != m.name) // case-sensitive, unlike joint lookups (docs/format.md §8 item 1)
             return "joint " + std::to_string(i) + " is " + quotedName(a.name) + " in the anim but " +
                    quotedName(m.name) + " in the mesh (names are compared case-sensitively)";
         if (a.parent != m.parent)

@@ -1,5 +1,5 @@
 #pragma once
-// What the md5mesh and md5anim parsers share (af-format §7.3, §7.4): keywords, `( x y z )` triples, and header
+// What the md5mesh and md5anim parsers share (docs/format.md §7.3, §7.4): keywords, `( x y z )` triples, and header
 // counts checked against the input size before anything is allocated for them.
 #include <algorithm>
 #include <cstdint>

@@ -29,7 +29,7 @@ constexpr std::size_t kMinWeightBytes = 19; // `weight 0 0 0(0 0 0)`
 using detail::quotedName;
 using detail::reserveFor;
 
-// af-format §7.3. The engine reads this grammar as a fixed sequence of expected tokens (no non-fatal flag),
+// docs/format.md §7.3. The engine reads this grammar as a fixed sequence of expected tokens (no non-fatal flag),
 // so every deviation is an error; on top of it every count, index and reference is checked here.
 class MeshParser : detail::Md5ParserBase {
   public:
@@ -129,7 +129,7 @@ class MeshParser : detail::Md5ParserBase {
         const Token parentToken = m_lex.peek();
         const std::int64_t parent = m_lex.parseInt("the parent joint index");
         // The engine only checks `parent < numJoints - 1`, but computes each joint's local transform from its
-        // parent's, so the parent must already be known (af-format §7.3, §8 item 21).
+        // parent's, so the parent must already be known (docs/format.md §7.3, §8 item 21).
         if (parent < -1 || parent >= index)
             m_lex.fail(parentToken, "joint " + std::to_string(index) + " " + quotedName(joint.name) + " has parent " +
                                         std::to_string(parent) +

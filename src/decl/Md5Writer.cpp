@@ -1,4 +1,4 @@
-// Canonical `.md5mesh` and `.md5anim` text (af-format §7.3, §7.4): the inverse of parseMd5Mesh and
+// Canonical `.md5mesh` and `.md5anim` text (docs/format.md §7.3, §7.4): the inverse of parseMd5Mesh and
 // parseMd5Anim, laid out as the id exporters lay them out (one entry a line, tab-indented blocks).
 #include <algorithm>
 #include <charconv>

@@ -1,4 +1,4 @@
-// A figure's bodies (af-format §2.2, §3): shape, mass properties, principal frame, friction, contents.
+// A figure's bodies (docs/format.md §2.2, §3): shape, mass properties, principal frame, friction, contents.
 #include <algorithm>
 #include <cmath>
 

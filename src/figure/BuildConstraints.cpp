@@ -1,4 +1,4 @@
-// A figure's constraints (af-format §4): bodies, frames in both bodies, limits, friction and springs.
+// A figure's constraints (docs/format.md §4): bodies, frames in both bodies, limits, friction and springs.
 #include <algorithm>
 #include <cmath>
 #include <numbers>

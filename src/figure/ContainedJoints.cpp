@@ -1,4 +1,4 @@
-// Which body takes the impacts on each md5 joint (af-format §5.3).
+// Which body takes the impacts on each md5 joint (docs/format.md §5.3).
 #include <algorithm>
 #include <map>
 #include <sstream>

@@ -15,7 +15,7 @@ Eigen::Matrix3d anglesToRotation(double pitchDeg, double yawDeg, double rollDeg)
 }
 
 Eigen::Vector3d rotationToAngles(const Eigen::Matrix3d& r) {
-    // Column 0 (forward) = (cp·cy, cp·sy, −sp); the roll from the z components of left and up (af-format §0).
+    // Column 0 (forward) = (cp·cy, cp·sy, −sp); the roll from the z components of left and up (docs/format.md §0).
     const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
     double yaw = 0, roll = 0;
     if (std::abs(r(2, 0)) < 1 - 1e-12) {

@@ -1,4 +1,4 @@
-// Building a Figure from an `.af` decl and its skeleton: af-format §1.8 (ordering), §2 (placement), §3
+// Building a Figure from an `.af` decl and its skeleton: docs/format.md §1.8 (ordering), §2 (placement), §3
 // (shapes and mass), §4 (constraint meaning), §5.3 (containedJoints), §6 (rest, collision). Findings name
 // every silent engine fallback and every "behave weird or explode" condition of id's modding guide. This file
 // holds the build order and what every part shares; FigureBuilder.h says where the rest lives.

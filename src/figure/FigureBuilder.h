@@ -1,7 +1,7 @@
 #pragma once
 // The figure builder's internals, shared by the files that implement it, one concept each:
 //   FigureBuilder.cpp   — the build order, body order, vector expressions, rest rules, decl → figure words
-//   BuildBodies.cpp     — shapes, mass properties, friction, contents (af-format §2.2, §3)
+//   BuildBodies.cpp     — shapes, mass properties, friction, contents (docs/format.md §2.2, §3)
 //   BuildConstraints.cpp — constraint frames, limits and springs (§4)
 //   ContainedJoints.cpp — which body takes each joint's impacts (§5.3)
 //   Bounds.cpp          — hostile numbers: non-finite values, sizes, masses, inertia and friction bounds

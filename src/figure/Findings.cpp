@@ -11,7 +11,8 @@
 namespace afb::figure::detail {
 
 // A limit the load pose already exceeds is enforced from the first step: the engine pushes the joint in at
-// once (§4.3, §4.5). The excess is measured as the drop metrics measure it (Limits.h), on the built frames.
+// once (docs/format.md §4.3, §4.5). The excess is measured as the drop metrics measure it (Limits.h), on the
+// built frames.
 void Builder::lintLimitAtLoadPose(const FigureConstraint& c, const std::string& what) {
     auto rotation = [&](int body) -> Matrix3d {
         if (body < 0) return Matrix3d::Identity(); // a world constraint's data is in model space

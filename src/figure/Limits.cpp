@@ -1,4 +1,4 @@
-// Limit excess, one definition (af-format §4.3, §4.5). Every angle is exact (atan2 and acos of the current
+// Limit excess, one definition (docs/format.md §4.3, §4.5). Every angle is exact (atan2 and acos of the current
 // directions), so the same number comes out whether the limit is checked at the load pose or after a drop.
 #include "afb/figure/Limits.h"
 

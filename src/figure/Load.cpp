@@ -43,7 +43,7 @@ std::optional<LoadedFigure> loadEntityFigure(const decl::Library& library, std::
     if (!r) return std::nullopt;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
     if (r->model.offset) offset = {r->model.offset->x, r->model.offset->y, r->model.offset->z};
-    // §2.1: actors ("ragdoll") replace the root translation by the offset; AF entities add it.
+    // docs/format.md §2.1: actors ("ragdoll") replace the root translation by the offset; AF entities add it.
     const RootTranslation root =
         r->figureKey == "ragdoll" ? RootTranslation::ReplacedByOffset : RootTranslation::OffsetAdded;
     std::optional<LoadedFigure> loaded = loadFigureFiles(r->figureFile, r->figureName, r->meshPath, r->afPosePath,

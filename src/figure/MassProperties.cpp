@@ -1,4 +1,4 @@
-// Exact polyhedral mass properties (af-format §3.2). Each face is fanned into triangles; each triangle with
+// Exact polyhedral mass properties (docs/format.md §3.2). Each face is fanned into triangles; each triangle with
 // the reference point r spans a signed tetrahedron (0, a, b, c) in coordinates relative to r, whose integrals
 // are closed-form:
 //   ∫ dV        = D/6,                                     D = a · (b × c)
@@ -82,7 +82,7 @@ MassProperties computeMassProperties(const Polytope& polytope, double density) {
 MassProperties computeClipModelMassProperties(const Polytope& polytope, double density) {
     MassProperties result = computeMassProperties(polytope, density);
     if (result.volume == 0.0) {
-        // af-format §3.2: idTraceModel returns volume 1, COM 0, inertia identity; idClipModel scales by
+        // docs/format.md §3.2: idTraceModel returns volume 1, COM 0, inertia identity; idClipModel scales by
         // density.
         result.mass = density;
         result.centerOfMass = Eigen::Vector3d::Zero();

@@ -11,23 +11,23 @@ namespace {
 
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
 
-// The engine's CheckModelHierarchy against the figure's skeleton (af-format §7.4), then what animPoseLocal
+// The engine's CheckModelHierarchy against the figure's skeleton (docs/format.md §7.4), then what animPoseLocal
 // relies on that the parser guarantees and a hand-built value may not. The first problem, or nullopt.
 std::optional<std::string> animMismatch(const Skeleton& skeleton, const decl::Md5Anim& anim) {
     const std::size_t n = static_cast<std::size_t>(skeleton.jointCount());
     if (anim.hierarchy.size() != n)
         return "the animation has " + std::to_string(anim.hierarchy.size()) + " joints, the skeleton " +
-               std::to_string(n) + " (af-format §7.4)";
+               std::to_string(n) + " (docs/format.md §7.4)";
     for (std::size_t j = 0; j < n; ++j) {
         const decl::Md5HierarchyEntry& h = anim.hierarchy[j];
         const int joint = static_cast<int>(j);
         if (h.name != skeleton.name(joint))
             return "animation joint " + std::to_string(j) + " is " + quoted(h.name) + ", the skeleton's " +
-                   quoted(skeleton.name(joint)) + " (names compare case-sensitively, af-format §7.4)";
+                   quoted(skeleton.name(joint)) + " (names compare case-sensitively, docs/format.md §7.4)";
         if (h.parent != skeleton.parent(joint))
             return "animation joint " + std::to_string(j) + " " + quoted(h.name) + " has parent " +
                    std::to_string(h.parent) + ", the skeleton's " + std::to_string(skeleton.parent(joint)) +
-                   " (af-format §7.4)";
+                   " (docs/format.md §7.4)";
         if (h.flags < 0 || h.flags > decl::kMd5AllComponents || h.startIndex < 0 ||
             h.startIndex + decl::animatedComponentCount(h.flags) > anim.numAnimatedComponents)
             return "animation joint " + std::to_string(j) + " " + quoted(h.name) +
@@ -95,7 +95,7 @@ std::optional<std::vector<Transform>> jointsFromAnimation(const Figure& figure, 
         diagnostics.error(where, "cannot pose the figure from the animation: " + *problem);
         return std::nullopt;
     }
-    // af-format §2.1: the animator treats every frame's root as it treated af_pose's when the figure was loaded.
+    // docs/format.md §2.1: the animator treats every frame's root as it treated af_pose's when the figure was loaded.
     std::vector<Transform> local = animPoseLocal(anim, timeSeconds);
     if (skeleton.rootTranslation() == RootTranslation::ReplacedByOffset) local[0].position = skeleton.modelOffset();
     else local[0].position += skeleton.modelOffset();
@@ -125,7 +125,7 @@ std::optional<std::vector<BodyState>> bodyStatesFromAnimation(const Figure& figu
     if (!now) return std::nullopt;
     const auto earlier = jointsFromAnimation(figure, anim, timeSeconds - velocityStepSeconds, diagnostics);
     if (!earlier) return std::nullopt;
-    // af-format §5.4: SetupPose at t − step, ChangePose at t.
+    // docs/format.md §5.4: SetupPose at t − step, ChangePose at t.
     return inheritVelocities(bodiesFromJoints(figure, entity, *earlier), bodiesFromJoints(figure, entity, *now),
                              velocityStepSeconds);
 }

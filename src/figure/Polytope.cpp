@@ -1,4 +1,4 @@
-// Trace-model shapes (af-format §3.1). Vertex layouts follow the engine's so indices can be compared; the
+// Trace-model shapes (docs/format.md §3.1). Vertex layouts follow the engine's so indices can be compared; the
 // face loops are our own, each counter-clockwise seen from outside.
 #include "afb/figure/Polytope.h"
 
@@ -23,7 +23,7 @@ constexpr double kDodA = 0.57735026918962576451;
 constexpr double kDodB = 0.35682208977308993194;
 constexpr double kDodC = 0.93417235896271569645;
 
-// Unit-dodecahedron vertices in the engine's order (af-format §3.1).
+// Unit-dodecahedron vertices in the engine's order (docs/format.md §3.1).
 constexpr std::array<std::array<double, 3>, 20> kDodVertices = {{
     {kDodA, kDodA, kDodA},  {kDodA, kDodA, -kDodA},  {kDodA, -kDodA, kDodA},  {kDodA, -kDodA, -kDodA},
     {-kDodA, kDodA, kDodA}, {-kDodA, kDodA, -kDodA}, {-kDodA, -kDodA, kDodA}, {-kDodA, -kDodA, -kDodA},
@@ -109,7 +109,7 @@ double inRadius(std::span<const FacePlane> planes) {
 }
 
 int effectiveCylinderSides(int requested) {
-    // af-format §3.1: the engine's checks in order (written without the products, which could overflow).
+    // docs/format.md §3.1: the engine's checks in order (written without the products, which could overflow).
     int n = requested < 3 ? 3 : requested;
     if (n > kMaxVerts / 2) n = kMaxVerts / 2; // 2n ≤ MAX_TRACEMODEL_VERTS
     if (n > kMaxEdges / 3) n = kMaxEdges / 3; // 3n ≤ MAX_TRACEMODEL_EDGES
@@ -118,7 +118,7 @@ int effectiveCylinderSides(int requested) {
 }
 
 int effectiveConeSides(int requested) {
-    // af-format §3.1: n < 2 → 3, so a 2-sided (zero-volume) cone is accepted.
+    // docs/format.md §3.1: n < 2 → 3, so a 2-sided (zero-volume) cone is accepted.
     int n = requested < 2 ? 3 : requested;
     if (n > kMaxVerts - 1) n = kMaxVerts - 1; // n + 1 ≤ MAX_TRACEMODEL_VERTS
     if (n > kMaxEdges / 2) n = kMaxEdges / 2; // 2n ≤ MAX_TRACEMODEL_EDGES
@@ -159,7 +159,7 @@ Polytope makeOctahedron(const Eigen::Vector3d& min, const Eigen::Vector3d& max) 
 }
 
 Polytope makeDodecahedron(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
-    // af-format §3.1: per-axis scale extent·0.5/c puts the ±c vertices on the bounds.
+    // docs/format.md §3.1: per-axis scale extent·0.5/c puts the ±c vertices on the bounds.
     const Eigen::Vector3d scale = (max - min) * (0.5 / kDodC);
     const Eigen::Vector3d centre = boundsCentre(min, max);
     Polytope dod;
@@ -193,7 +193,7 @@ ShapeBuild makeCylinder(const Eigen::Vector3d& min, const Eigen::Vector3d& max, 
 
 ShapeBuild makeCone(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2, int numSides) {
     const int n = effectiveConeSides(numSides);
-    // af-format §3.1: LoadBody rewrites the z bounds to [v1.z − v2.z, 0] before SetupCone, which puts the
+    // docs/format.md §3.1: LoadBody rewrites the z bounds to [v1.z − v2.z, 0] before SetupCone, which puts the
     // apex at z = 0 and hard-codes its x and y to 0.
     const Eigen::Vector3d min(v1.x(), v1.y(), v1.z() - v2.z());
     const Eigen::Vector3d max(v2.x(), v2.y(), 0.0);
@@ -227,11 +227,11 @@ Eigen::Matrix3d boneFrame(const Eigen::Vector3d& v1, const Eigen::Vector3d& v2) 
     const double length = diff.norm();
     if (length == 0.0) return Eigen::Matrix3d::Identity();
     const Eigen::Vector3d d = diff / length;
-    // af-format §0 NormalVectors: left = (−y, x, 0)/√(x² + y²), or (1, 0, 0) when x² + y² is exactly 0.
+    // docs/format.md §0 NormalVectors: left = (−y, x, 0)/√(x² + y²), or (1, 0, 0) when x² + y² is exactly 0.
     const double lenSqrXY = d.x() * d.x() + d.y() * d.y();
     const Eigen::Vector3d left =
         lenSqrXY == 0.0 ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(-d.y(), d.x(), 0) / std::sqrt(lenSqrXY);
-    // af-format §3.1: Doom's axis rows (left, d × left, d) are our columns.
+    // docs/format.md §3.1: Doom's axis rows (left, d × left, d) are our columns.
     Eigen::Matrix3d frame;
     frame.col(0) = left;
     frame.col(1) = d.cross(left);

@@ -13,7 +13,7 @@ namespace afb::figure {
 namespace {
 
 // A joint as the anim code blends it: a quaternion and a translation. The quaternion is already the standard
-// one, the conjugate of the file's (af-format §0, §7.3); slerp commutes with conjugation, so blending here
+// one, the conjugate of the file's (docs/format.md §0, §7.3); slerp commutes with conjugation, so blending here
 // equals blending the engine's quaternions and converting afterwards.
 struct JointQuat {
     Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
@@ -32,7 +32,7 @@ Eigen::Quaterniond quatFromMd5(double x, double y, double z) {
 
 // The baseframe with `frame`'s animated components written over it (nullptr: the baseframe alone), root
 // translation relative to the baseframe root (idMD5Anim::LoadAnim subtracts the baseframe value from the
-// animated root components and zeroes the baseframe root translation; af-format §7.4).
+// animated root components and zeroes the baseframe root translation; docs/format.md §7.4).
 std::vector<JointQuat> frameJoints(const decl::Md5Anim& anim, const std::vector<double>* frame) {
     std::vector<JointQuat> joints(anim.baseframe.size());
     for (std::size_t j = 0; j < anim.baseframe.size(); ++j) {
@@ -42,7 +42,7 @@ std::vector<JointQuat> frameJoints(const decl::Md5Anim& anim, const std::vector<
         if (frame && j < anim.hierarchy.size()) {
             const decl::Md5HierarchyEntry& h = anim.hierarchy[j];
             auto next = static_cast<std::size_t>(h.startIndex < 0 ? 0 : h.startIndex);
-            // Components are read in the order Tx, Ty, Tz, Qx, Qy, Qz (af-format §7.4); a hand-built frame
+            // Components are read in the order Tx, Ty, Tz, Qx, Qy, Qz (docs/format.md §7.4); a hand-built frame
             // that is too short leaves the rest at their baseframe values rather than reading past its end.
             const auto take = [&](int bit, double& value) {
                 if (!(h.flags & bit)) return;
@@ -108,7 +108,7 @@ std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::
     }
     if (mesh.joints[0].parent != -1) return "mesh joint 0 " + quotedName(mesh.joints[0].name) + " is not a root";
     if (auto m = decl::hierarchyMismatch(anim, mesh))
-        return "af_pose does not match the mesh hierarchy (af-format §7.4): " + *m;
+        return "af_pose does not match the mesh hierarchy (docs/format.md §7.4): " + *m;
     if (anim.frames.empty()) return "af_pose has no frames";
     if (anim.baseframe.size() != anim.hierarchy.size())
         return "af_pose has " + std::to_string(anim.baseframe.size()) + " baseframe joints but " +
@@ -157,19 +157,19 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
     for (const decl::Md5Joint& j : mesh.joints) {
         s.m_names.push_back(j.name);
         s.m_parents.push_back(j.parent);
-        // Mesh joints are model-space (af-format §7.3).
+        // Mesh joints are model-space (docs/format.md §7.3).
         s.m_bindPose.push_back(
             {rotationFromMd5(j.orientation.x, j.orientation.y, j.orientation.z), toEigen(j.position)});
     }
 
-    // af-format §2.1: idAF::Load builds the frame at 1 ms, then the root translation is replaced by (actors)
+    // docs/format.md §2.1: idAF::Load builds the frame at 1 ms, then the root translation is replaced by (actors)
     // or offset by (AF entities) the visual offset before the hierarchy is concatenated.
     std::vector<Transform> loadLocal = animPoseLocal(afPose, 0.001);
     if (rootTranslation == RootTranslation::ReplacedByOffset) loadLocal[0].position = modelOffset;
     else loadLocal[0].position += modelOffset;
     s.m_loadPose = toModelSpace(loadLocal, s.m_parents);
 
-    // af-format §5.1 step 3: FinishAFPose starts from GetSingleFrame(0), the baseframe (root translation
+    // docs/format.md §5.1 step 3: FinishAFPose starts from GetSingleFrame(0), the baseframe (root translation
     // zeroed by the loader); CreateFrame adds the offset to joint 0.
     s.m_afPoseLocal = toTransforms(frameJoints(afPose, nullptr));
     s.m_afPoseLocal[0].position += modelOffset;
@@ -182,7 +182,7 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
         }
     }
 
-    // af-format §8 item 19: calibration uses the 1 ms pose, runtime FK the baseframe. Report where they part.
+    // docs/format.md §8 item 19: calibration uses the 1 ms pose, runtime FK the baseframe. Report where they part.
     const std::vector<Transform> runtime = toModelSpace(s.m_afPoseLocal, s.m_parents);
     double worstUnits = 0, worstRad = 0;
     std::size_t worstJoint = 0;
@@ -198,20 +198,20 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
     }
     if (worstUnits > kPoseMismatchUnits || worstRad > kPoseMismatchRad)
         diagnostics.warning(where, "the af_pose load pose (frame 0 at 1 ms) differs from the af_pose baseframe that "
-                                   "drives the skeleton at run time (af-format §5.1, §8 item 19): joint " +
+                                   "drives the skeleton at run time (docs/format.md §5.1, §8 item 19): joint " +
                                        std::to_string(worstJoint) + " " + quotedName(s.m_names[worstJoint]) + " is " +
                                        std::to_string(worstUnits) + " units and " +
                                        std::to_string(worstRad * 180.0 / std::numbers::pi) +
                                        " degrees apart; keep af_pose single-frame with frame 0 equal to the baseframe");
 
-    // af-format §8 item 22: lookups find the first of two names equal ignoring case.
+    // docs/format.md §8 item 22: lookups find the first of two names equal ignoring case.
     for (std::size_t i = 1; i < n; ++i)
         for (std::size_t k = 0; k < i; ++k)
             if (text::equalsIgnoreCase(s.m_names[i], s.m_names[k])) {
                 diagnostics.warning(where, "joint " + std::to_string(i) + " " + quotedName(s.m_names[i]) +
                                                " has the same name, ignoring case, as joint " + std::to_string(k) +
                                                " " + quotedName(s.m_names[k]) + ": lookups by name find joint " +
-                                               std::to_string(k) + " (af-format §8 item 22)");
+                                               std::to_string(k) + " (docs/format.md §8 item 22)");
                 break;
             }
     return s;
@@ -237,7 +237,7 @@ std::vector<int> Skeleton::jointAndDescendants(int joint) const {
     if (joint < 0 || joint >= jointCount()) return out;
     out.push_back(joint);
     // idDeclModelDef::GetJointList: children follow their parent; the first joint whose parent comes before
-    // `joint` ends the subtree (af-format §5.3).
+    // `joint` ends the subtree (docs/format.md §5.3).
     for (int i = joint + 1; i < jointCount() && parent(i) >= joint; ++i) out.push_back(i);
     return out;
 }
@@ -248,7 +248,7 @@ std::vector<Transform> animFrameLocal(const decl::Md5Anim& anim, int frame) {
 
 std::vector<Transform> animPoseLocal(const decl::Md5Anim& anim, double timeSeconds) {
     const int numFrames = static_cast<int>(anim.frames.size());
-    // idMD5Anim::ConvertTimeToFrame with cyclecount 1 (af-format §2.1, §7.4).
+    // idMD5Anim::ConvertTimeToFrame with cyclecount 1 (docs/format.md §2.1, §7.4).
     if (numFrames <= 1 || !(timeSeconds > 0)) return animFrameLocal(anim, 0);
     const double frameTime = timeSeconds * anim.frameRate;
     if (!(frameTime < numFrames - 1)) return animFrameLocal(anim, numFrames - 1);

@@ -205,7 +205,7 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
             mergeInto(j, group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)]);
     }
     // The base body holds joint 0; while it has too few vertices it takes in the child group with the most vertices
-    // (the pelvis: Doom's base body, af-format §2.4).
+    // (the pelvis: Doom's base body, docs/format.md §2.4).
     while (static_cast<int>(pointsOf(0).size()) < std::max(minVertices, 1)) {
         int bestChild = -1;
         std::size_t bestCount = 0;

@@ -42,7 +42,7 @@ std::string lower(std::string s) {
     return s;
 }
 
-// A body or constraint name: the joint's, unique ignoring case, never "origin" or "world" (af-format §1.4).
+// A body or constraint name: the joint's, unique ignoring case, never "origin" or "world" (docs/format.md §1.4).
 std::string uniqueName(const std::string& wanted, std::set<std::string>& taken) {
     std::string base = wanted.empty() ? "body" : wanted;
     if (lower(base) == "origin" || lower(base) == "world") base += "_body";
@@ -82,7 +82,7 @@ const JointTemplate& templateFor(const std::string& jointName, const GenRules& r
 }
 
 // containedJoints for a group: "*head -*child …" when that selects exactly the group's joints (the engine's
-// descendant scan, af-format §5.3), else the joints one by one.
+// descendant scan, docs/format.md §5.3), else the joints one by one.
 std::string containedJoints(const Rig& rig, const BodyFit& body, const std::vector<BodyFit>& bodies) {
     const int n = static_cast<int>(rig.joints.size());
     const auto subtree = [&](int j) {
@@ -133,11 +133,11 @@ decl::AfConstraint constraintFor(const Rig& rig, const BodyFit& child, const std
     c.anchor = decl::AfVector::fromJoint(jointName);
     c.friction = t.friction;
     if (t.type == decl::ConstraintType::Hinge) {
-        // Bending back turns the child toward −forward: about forward × d (right-handed, af-format §4.5).
+        // Bending back turns the child toward −forward: about forward × d (right-handed, docs/format.md §4.5).
         Eigen::Vector3d axis = t.bend == "back" ? forward.cross(d) : d.cross(forward);
         if (axis.norm() < 0.2) axis = Eigen::Vector3d::UnitZ().cross(forward);
         c.axis = lit(axis.normalized(), 8); // unit within 1e-8: no engine distortion of the limit (§4.5)
-        // limit a0, a1, a2 allows [a2 − a0 − a1/2, a2 − a0 + a1/2] (af-format §4.5).
+        // limit a0, a1, a2 allows [a2 − a0 − a1/2, a2 − a0 + a1/2] (docs/format.md §4.5).
         c.limit = decl::HingeLimit{0, rnd(t.maxDeg - t.minDeg), rnd((t.maxDeg + t.minDeg) / 2)};
         return c;
     }
@@ -185,7 +185,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
         diagnostics.error(where, "the bodies have no volume or the mass is not positive");
         return std::nullopt;
     }
-    const double density = mass / totalVolume; // Doom's density: mass per cubic unit (af-format §3.3)
+    const double density = mass / totalVolume; // Doom's density: mass per cubic unit (docs/format.md §3.3)
 
     decl::AfDecl& af = out.af;
     af.name = options.name;

@@ -1,4 +1,4 @@
-// The md5 side of gen::Rig: a rig from an md5mesh, and the md5mesh and af_pose md5anim of a rig (af-format §7.3,
+// The md5 side of gen::Rig: a rig from an md5mesh, and the md5mesh and af_pose md5anim of a rig (docs/format.md §7.3,
 // §7.4), written by the decl writers.
 #include <algorithm>
 #include <cmath>
@@ -55,7 +55,7 @@ Rig rigFromMd5(const decl::Md5Mesh& source) {
     decl::Md5Mesh mesh = source;
     const bool hasOrigin = !mesh.joints.empty() && namesEqualIgnoringCase(mesh.joints[0].name, "origin");
     if (!hasOrigin) {
-        // Doom's base body drives the first child of "origin" (af-format §2.4): give the rig one, at the identity.
+        // Doom's base body drives the first child of "origin" (docs/format.md §2.4): give the rig one, at the identity.
         for (decl::Md5Joint& j : mesh.joints) j.parent += 1;
         mesh.joints.insert(mesh.joints.begin(), decl::Md5Joint{"origin", -1, {}, {}});
         for (decl::Md5SubMesh& m : mesh.meshes)

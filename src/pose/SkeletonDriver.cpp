@@ -15,7 +15,7 @@ SkeletonPose driveSkeleton(const figure::Figure& figure, std::span<const Transfo
     const std::size_t n = static_cast<std::size_t>(skel.jointCount());
     SkeletonPose out;
 
-    // §5.1 step 1: the entity follows body 0: R_ent = R_b0·R_base0ᵀ, p_ent = p_b0 − R_ent·p_base0.
+    // docs/format.md §5.1 step 1: the entity follows body 0: R_ent = R_b0·R_base0ᵀ, p_ent = p_b0 − R_ent·p_base0.
     if (!bodies.empty() && !figure.bodies.empty()) {
         const Transform& b0 = bodies[0];
         const Transform& base0 = figure.bodies[0].loadPose;

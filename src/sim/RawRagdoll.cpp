@@ -1,4 +1,4 @@
-// Plain Bullet's version of a figure (the chart's reference): the mapping of af-format §4 a plain Bullet user
+// Plain Bullet's version of a figure (the chart's reference): the mapping of docs/format.md §4 a plain Bullet user
 // would write, on the same bodies as bullet::Ragdoll. RawRagdoll.h lists every choice.
 #include "afb/sim/RawRagdoll.h"
 

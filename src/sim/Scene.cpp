@@ -1,4 +1,4 @@
-// The one scene (ARCHITECTURE.md: src/sim): Bullet's default collision parts, the sequential-impulse solver,
+// The one scene (docs/architecture.md: src/sim): Bullet's default collision parts, the sequential-impulse solver,
 // the method's world-level knobs through bullet::RagdollWorld.
 #include "afb/sim/Scene.h"
 
@@ -18,7 +18,7 @@ Scene::Scene(const bullet::Method& method, const SceneSettings& settings)
     m_world->setGravity(btVector3(0, 0, static_cast<btScalar>(-settings.gravityMps2)));
     // Bullet recomputes every object's bounding box every step by default, sleeping and static ones too; nothing
     // here moves a static or sleeping object without waking it, so only active objects are updated (what a resting
-    // ragdoll costs, README: Economy).
+    // ragdoll costs, docs/performance.md).
     m_world->setForceUpdateAllAabbs(false);
     if (settings.ground) {
         m_groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);

@@ -9,7 +9,7 @@ namespace {
 
 bool isAlpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
 bool isDigit(char c) { return c >= '0' && c <= '9'; }
-// With LEXFL_ALLOWPATHNAMES a name may also hold these (af-format §1.1).
+// With LEXFL_ALLOWPATHNAMES a name may also hold these (docs/format.md §1.1).
 bool isPathChar(char c) { return c == '/' || c == '\\' || c == ':' || c == '.'; }
 bool isNameChar(char c) { return isAlpha(c) || isDigit(c) || isPathChar(c); }
 char lower(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
@@ -190,7 +190,7 @@ void Lexer::concatenateContinuations(Token& t) {
     }
 }
 
-// idLexer::ReadNumber semantics (af-format §1.1): decimal with '.', exponent and f/l suffix; 0x hex; 0b binary;
+// idLexer::ReadNumber semantics (docs/format.md §1.1): decimal with '.', exponent and f/l suffix; 0x hex; 0b binary;
 // a leading 0 not followed by '.' is octal. We reject what the engine would silently split or mangle.
 Token Lexer::lexNumber(Token t) {
     const std::size_t start = m_pos;

@@ -1,4 +1,4 @@
-// The same-run reference (issue 12): the bundled humanoid built through afbullet and as plain Bullet
+// The same-run reference: the bundled humanoid built through afbullet and as plain Bullet
 // (sim::RawRagdoll, method `raw`), dropped in the same program, each one's cost per awake body-step and their ratio.
 //   BM_Drop/<method>   16 humanoids dropped 1 m, 300 steps at 60 Hz, sleeping off (the chart's scene, every body
 //                      awake): CPU µs per awake body-step (counter us_per_awake_body_step)
@@ -11,7 +11,7 @@
 //   BM_LodSwitch       one humanoid of a world of 100 (default method), 0.5 s into its fall: µs to switch it to
 //                      LOD 6 (Ragdoll::setLod) and back (setFullDetail), timed apart
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
-// solve contacts and joints with 20), default, iterative (the default until session 15: default with
+// solve contacts and joints with 20), default, iterative (the previous default: default with
 // direct-joints off, position-tree 0, friction-directions 1), fast; BM_Drop also `floor` (floorMethod()). After the
 // runs, a table of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction
 // counts, exact from run to run, come from cmake/callgrind-cost.sh.
@@ -72,7 +72,7 @@ std::vector<Labelled> methods() {
             {"fast", *afb::bullet::methodPreset("fast")}};
 }
 
-/// The floor under any method on Bullet's solver (README: Economy): `fast` without the position pass, speculative
+/// The floor under any method on Bullet's solver (docs/performance.md): `fast` without the position pass, speculative
 /// limits and contacts and full manifolds, i.e. Bullet's 20 iterations over the merged figure, on afbullet's
 /// solver (warm-started joints, SSE row updates). Dropped only (BM_Drop/floor): a measure of the solver, not a
 /// method anyone would choose for accuracy.

@@ -1,4 +1,4 @@
-// Each constraint type and limit loaded against its limit in Bullet (af-format §4): limits hold to within 1°,
+// Each constraint type and limit loaded against its limit in Bullet (docs/format.md §4): limits hold to within 1°,
 // free directions move freely. Deterministic: fixed 60 Hz step, fixed insertion order, no randomness.
 #include <catch2/catch.hpp>
 
@@ -78,7 +78,7 @@ TEST_CASE("hinge: the limit range is the spec's, centred and off-centre", "[bull
         double gravityZ;
         double expectDeg; // φ at rest against the limit
     };
-    // af-format §4.5: φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2]; rotation about +Y by +φ turns the arm's +X down.
+    // docs/format.md §4.5: φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2]; rotation about +Y by +φ turns the arm's +X down.
     const Case cases[] = {{"0, 90, 0", -9.81, 45},
                           {"0, 90, 0", 9.81, -45},
                           {"30, 90, 0", -9.81, 15},
@@ -134,7 +134,7 @@ TEST_CASE("ballAndSocketJoint cone limit: shaft within half the apex angle, twis
 }
 
 TEST_CASE("ballAndSocketJoint pyramid limit: a true pyramid, corners included", "[bullet][constraints]") {
-    // f = +X, l = +Y, u = +Z (roll 0): |angle toward Y| ≤ 30°, |angle toward Z| ≤ 20° (af-format §4.3).
+    // f = +X, l = +Y, u = +Z (roll 0): |angle toward Y| ≤ 30°, |angle toward Z| ≤ 20° (docs/format.md §4.3).
     const std::string pyramid = "ballAndSocketJoint \"b\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) "
                                 "friction 0 pyramidLimit ( 1, 0, 0 ), 60, 40, 0, ( 1, 0, 0 ) }";
     auto planar = [](const Scene& s) {

@@ -1,4 +1,4 @@
-// Economy (issue 12): pairs pruned once per figure never touch within the limits.
+// Economy: pairs pruned once per figure never touch within the limits.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -147,7 +147,7 @@ TEST_CASE("economy: pruned self-collision pairs never touch within the joint lim
 
 TEST_CASE("economy: pruned pairs on the corpus figures never touch within the limits", "[bullet][economy][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);
-    for (const char* entity : {"monster_zsec_machinegun", "monster_zsec_pistol"}) // 2 pairs each (README: Economy)
+    for (const char* entity : {"monster_zsec_machinegun", "monster_zsec_pistol"}) // 2 pairs each (docs/performance.md)
         CHECK(checkPruning(test::loadEntity(entity, corpus / "doom3-kroom3/base").figure, 600) > 0);
 }
 

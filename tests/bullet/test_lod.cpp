@@ -1,4 +1,4 @@
-// Economy (issue 12): levels of detail, bodies merged into fewer rigid bodies and back at runtime.
+// Economy: levels of detail, bodies merged into fewer rigid bodies and back at runtime.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -239,7 +239,7 @@ TEST_CASE("lod: a merged group has the exact combined mass, centre and inertia a
 
 TEST_CASE("lod: two rigids a joint joins never collide, even when a body of one may touch the other", "[bullet][lod]") {
     // What Bullet's constraint references did when the ragdoll passed them to addConstraint: a joint that disables
-    // collision between its bodies keeps their rigids' pair off, whatever else the rigids hold (§6.2).
+    // collision between its bodies keeps their rigids' pair off, whatever else the rigids hold (docs/format.md §6.2).
     const auto loaded = test::loadEntity("humanoid");
     const figure::Figure& f = loaded.figure;
     const auto asset = bullet::RagdollAsset::create(f);

@@ -1,4 +1,4 @@
-// Economy (issue 12): bodies joined by `fixed` constraints merged into one rigid body (Method::mergeFixed).
+// Economy: bodies joined by `fixed` constraints merged into one rigid body (Method::mergeFixed).
 #include <catch2/catch.hpp>
 
 #include <algorithm>

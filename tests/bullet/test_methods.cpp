@@ -100,7 +100,7 @@ TEST_CASE("methods: presets, knobs and their text form", "[bullet][methods]") {
     }
     CHECK_FALSE(afb::bullet::methodPreset("fastest"));
     CHECK(*afb::bullet::methodPreset("default") == Method{});
-    // "iterative": the default's knobs with Bullet's iterative joint solve (the default until session 15).
+    // "iterative": the default's knobs with Bullet's iterative joint solve (the previous default).
     Method iterative = afb::bullet::iterativeJoints(Method{});
     iterative.name = "iterative";
     CHECK(*afb::bullet::methodPreset("iterative") == iterative);

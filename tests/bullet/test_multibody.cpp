@@ -83,7 +83,7 @@ double kineticEnergy(const Figure& f, const Ragdoll& r) {
 }
 
 // The twist of a universal joint's body-2 frame relative to its body-1 frame about shaft 1 (their X axes), rad:
-// §4.4's joint keeps it at zero (no relative spin about the shafts).
+// docs/format.md §4.4's joint keeps it at zero (no relative spin about the shafts).
 double twistRad(const Ragdoll& r, int c) {
     const auto [f1, f2] = r.constraintFramesWorld(c);
     btQuaternion q;
@@ -122,7 +122,7 @@ TEST_CASE("multibody: every body spawns at spawn × loadPose, every joint holds,
         };
         check("at spawn", 1e-5, 1e-5);
         for (int step = 0; step < 60; ++step) scene.step(1.0 / 60.0);
-        check("after 1 s", 1e-4, 0.01 * kDeg); // the issue's spawn bound: 1e-4 m and 0.01°
+        check("after 1 s", 1e-4, 0.01 * kDeg); // the spawn bound: 1e-4 m and 0.01°
     }
 }
 
@@ -383,7 +383,7 @@ TEST_CASE("multibody: the zsec sets dropped from 10 m and 100 m never explode", 
         INFO(height << " m: anchor " << d.maxAnchorErrorM << " m, limit " << d.maxLimitViolationDeg << " deg at "
                     << d.worstLimitJoint << ", fastest " << d.maxSpeedMps << " m/s");
         CHECK_FALSE(d.exploded);
-        CHECK(d.maxAnchorErrorM < 1e-5); // the issue's 0.01 mm
+        CHECK(d.maxAnchorErrorM < 1e-5); // the backend's bound: 0.01 mm
     }
 }
 

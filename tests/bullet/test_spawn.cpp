@@ -1,5 +1,5 @@
 // Spawning figures into Bullet (float build): RagdollAsset shapes and margins, Ragdoll placement, a figure at rest
-// staying at rest without gravity, shared shapes and clean removal (af-format §2.5, §3.1, §4.1, §4.5, §6.2).
+// staying at rest without gravity, shared shapes and clean removal (docs/format.md §2.5, §3.1, §4.1, §4.5, §6.2).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -129,7 +129,7 @@ struct Scene {
 };
 
 // Hinges whose range excludes the load pose (φ = 0): the engine's cone limit pushes such a hinge into its range
-// at once (af-format §4.3, §4.5), so the figure cannot stay at rest. Returns their names.
+// at once (docs/format.md §4.3, §4.5), so the figure cannot stay at rest. Returns their names.
 std::vector<std::string> hingesStartingOutside(const Figure& figure) {
     std::vector<std::string> names;
     for (const figure::FigureConstraint& c : figure.constraints)

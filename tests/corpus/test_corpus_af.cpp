@@ -256,7 +256,7 @@ TEST_CASE("corpus: monster_zombie_security_pistol.af spot checks", "[corpus][af]
     CHECK(h->widthDeg == 70.0);
     CHECK(h->angleDeg == 90.0);
 
-    // Every body comes after the settings block, so each takes its values (§1.8).
+    // Every body comes after the settings block, so each takes its values (docs/format.md §1.8).
     CHECK(d.settingsForBody(0).friction.contact == 0.5);
     CHECK(d.finalSettings().totalMass == 250.0);
 }

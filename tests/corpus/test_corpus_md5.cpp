@@ -158,7 +158,7 @@ TEST_CASE("corpus md5: the zsec af_pose anims are still poses matching their mes
         REQUIRE(pose->hierarchy.size() == s.joints);
         REQUIRE(pose->baseframe.size() == s.joints);
         for (std::size_t i = 0; i < s.joints; ++i) {
-            CHECK(pose->hierarchy[i].name == mesh->joints[i].name); // case-sensitive, af-format §7.4
+            CHECK(pose->hierarchy[i].name == mesh->joints[i].name); // case-sensitive, docs/format.md §7.4
             CHECK(pose->hierarchy[i].parent == mesh->joints[i].parent);
             CHECK(pose->hierarchy[i].flags == 0);
         }
@@ -190,7 +190,7 @@ TEST_CASE("corpus md5: known facts of the zsec pistol mesh", "[corpus][md5]") {
     CHECK(mesh->joints[1].position.z == Approx(44.9718208313));
     CHECK(mesh->joints[9].name == "Lknee");
     CHECK(mesh->joints[9].parent == 5);
-    // The .af files spell joints in another case (af-format §8 item 1); lookup ignores it.
+    // The .af files spell joints in another case (docs/format.md §8 item 1); lookup ignores it.
     CHECK(decl::findJoint(*mesh, "rupleg") == 10);
     CHECK(decl::findJoint(*mesh, "Rupleg") == 10);
     REQUIRE(mesh->meshes.size() == 4);

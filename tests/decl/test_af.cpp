@@ -1,4 +1,4 @@
-// Spec-driven tests of the `.af` parser and writer (af-format §1.1-§1.8, §8 items 1, 2, 3, 10, 11, 12, 13, 15;
+// Spec-driven tests of the `.af` parser and writer (docs/format.md §1.1-§1.8, §8 items 1, 2, 3, 10, 11, 12, 13, 15;
 // plus the project's policy: engine fallbacks become located errors or warnings, errors give nullopt).
 #include <catch2/catch.hpp>
 
@@ -134,7 +134,7 @@ AfVector twoJoints(AfVector::Form form, const std::string& a, const std::string&
 
 // A ~2 KB figure that uses every block type and nearly every key (used for values, round trips and mutations).
 const std::string kEverything = R"AF(/*
-	Written for the tests; exercises every block and key of af-format §1.3-§1.7.
+	Written for the tests; exercises every block and key of docs/format.md §1.3-§1.7.
 */
 articulatedFigure everything {
 	settings {
@@ -468,7 +468,7 @@ TEST_CASE("af: a figure with every block and key", "[af]") {
     SECTION("defaultBody1: the first body parsed before the constraint") { CHECK(d.defaultBody1(2) == "pelvis"); }
 }
 
-TEST_CASE("af: the illustrative example of af-format §1.8", "[af]") {
+TEST_CASE("af: the illustrative example of docs/format.md §1.8", "[af]") {
     const std::string text = R"AF(articulatedFigure example_ragdoll {
 	settings {
 		model "example_model"

@@ -1,4 +1,4 @@
-// Unit tests of the .def parser (af-format §7.1 model decls, §7.2 entityDef keys) on texts written for the
+// Unit tests of the .def parser (docs/format.md §7.1 model decls, §7.2 entityDef keys) on texts written for the
 // purpose.
 #include <catch2/catch.hpp>
 

@@ -1,5 +1,5 @@
 // Unit tests of decl::Library: indexing a content folder and resolving entity → model → mesh/af_pose/figure
-// (af-format §7.1, §7.2), on a temporary folder written by the tests.
+// (docs/format.md §7.1, §7.2), on a temporary folder written by the tests.
 #include <catch2/catch.hpp>
 
 #include <atomic>

@@ -1,4 +1,4 @@
-// Unit tests of the md5mesh and md5anim parsers (af-format §7.3, §7.4) on small texts written for the
+// Unit tests of the md5mesh and md5anim parsers (docs/format.md §7.3, §7.4) on small texts written for the
 // purpose.
 #include <catch2/catch.hpp>
 
@@ -167,7 +167,7 @@ TEST_CASE("md5mesh: joint lookup ignores case and returns the first match", "[md
     REQUIRE(mesh);
     CHECK(decl::findJoint(*mesh, "origin") == 0);
     CHECK(decl::findJoint(*mesh, "ORIGIN") == 0);
-    CHECK(decl::findJoint(*mesh, "body") == 1); // "Body" (1) shadows "body" (2), af-format §8 item 22
+    CHECK(decl::findJoint(*mesh, "body") == 1); // "Body" (1) shadows "body" (2), docs/format.md §8 item 22
     CHECK(decl::findJoint(*mesh, "BODY") == 1);
     CHECK_FALSE(decl::findJoint(*mesh, "head"));
     CHECK_FALSE(decl::findJoint(*mesh, ""));

@@ -1,5 +1,5 @@
-// figure::buildFigure against the spec (af-format §0, §1.2, §1.7, §1.8, §2.2–§2.4, §3.1–§3.4, §4.1–§4.7, §5.3,
-// §6.2, §8) and the findings the issue asks for. Expected values are worked out by hand from the spec, not from
+// figure::buildFigure against the spec (docs/format.md §0, §1.2, §1.7, §1.8, §2.2–§2.4, §3.1–§3.4, §4.1–§4.7, §5.3,
+// §6.2, §8) and the findings the builder reports. Expected values are worked out by hand from the spec, not from
 // the code under test; figures are built from inline `.af` text on hand-made skeletons (identity orientations).
 #include <catch2/catch.hpp>
 
@@ -158,7 +158,7 @@ std::pair<Transform, Transform> framesModel(const Figure& f, const FigureConstra
     return {a, b};
 }
 
-// The engine's distortion of a rotation angle about a non-unit axis of length L (af-format §4.5).
+// The engine's distortion of a rotation angle about a non-unit axis of length L (docs/format.md §4.5).
 double g(double thetaRad, double length) {
     return std::atan2(length * std::sin(thetaRad), 1.0 - length * length * (1.0 - std::cos(thetaRad)));
 }
@@ -936,7 +936,7 @@ TEST_CASE("figure: springs (§4.7)", "[figure]") {
 
 TEST_CASE("figure findings: a spring without an anchor, or starting outside [minLength, maxLength] (§4.7)",
           "[figure]") {
-    // Issue 17 (fuzz_e2e): `anchor1` written twice leaves anchor2 at the model origin, 50 units from anchor1
+    // Found by fuzz_e2e: `anchor1` written twice leaves anchor2 at the model origin, 50 units from anchor1
     // (0, 0, 50); that is above maxLength 20, so the length row yanks the bodies at once.
     const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
 	spring "twice" { body1 "chest" body2 "pelvis" anchor1 ( 0, 0, 60 ) anchor1 ( 0, 0, 50 ) stretch 10 compress 10
@@ -992,7 +992,7 @@ TEST_CASE("figure: selfCollisionPairs and attachedToWorld (§6.2)", "[figure]") 
     CHECK_FALSE(off.figure->selfCollision);
 }
 
-// --- findings (the issue's list; errors stop the build, warnings do not) ---------------------------------------
+// --- findings (errors stop the build, warnings do not) -----------------------------------------------------------
 
 TEST_CASE("figure findings: unknown joints", "[figure]") {
     SECTION("a body's joint") {

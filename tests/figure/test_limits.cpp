@@ -1,5 +1,6 @@
-// Limit excess (figure/Limits.h) against closed forms: cone angles, pyramid edges and corners (af-format
-// §4.3), hinge ranges centred, off-centre and across ±180° (§4.5), and invariance under a common rotation.
+// Limit excess (figure/Limits.h) against closed forms: cone angles, pyramid edges and corners
+// (docs/format.md §4.3), hinge ranges centred, off-centre and across ±180° (§4.5), and invariance under a
+// common rotation.
 #include <catch2/catch.hpp>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Exact polyhedral mass properties against the closed forms of af-format §3.2, and the zero-volume rule.
+// Exact polyhedral mass properties against the closed forms of docs/format.md §3.2, and the zero-volume rule.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -120,7 +120,7 @@ TEST_CASE("mass: octahedron closed form", "[figure][mass]") {
 }
 
 TEST_CASE("mass: dodecahedron closed form", "[figure][mass]") {
-    // af-format §3.2: volume (3√5 − 5)/4 · ex·ey·ez; <x²> = 0.044306·ex², exactly (20 − 3√5)/300 · ex².
+    // docs/format.md §3.2: volume (3√5 − 5)/4 · ex·ey·ez; <x²> = 0.044306·ex², exactly (20 − 3√5)/300 · ex².
     const double sqrt5 = std::sqrt(5.0);
     const double volumeFactor = (3 * sqrt5 - 5) / 4;
     const double secondFactor = (20 - 3 * sqrt5) / 300;

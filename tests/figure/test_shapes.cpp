@@ -1,4 +1,4 @@
-// Trace-model shape construction (af-format §3.1): vertex layouts, counts, side clamps, orientation, the bone
+// Trace-model shape construction (docs/format.md §3.1): vertex layouts, counts, side clamps, orientation, the bone
 // frame.
 #include <catch2/catch.hpp>
 
@@ -122,7 +122,7 @@ TEST_CASE("dodecahedron: 20/30/12, planar pentagons, ±c vertices touch the boun
         checkConvexClosedOutward(dod);
         for (const auto& face : dod.faces) CHECK(face.size() == 5);
         const double tol = 1e-12 * (max - min).norm();
-        // af-format §3.1 vertex order: 8–11 = (±b, ±c, 0), 12–15 = (±c, 0, ±b), 16–19 = (0, ±b, ±c).
+        // docs/format.md §3.1 vertex order: 8–11 = (±b, ±c, 0), 12–15 = (±c, 0, ±b), 16–19 = (0, ±b, ±c).
         CHECK(dod.vertices[12].x() == Approx(max.x()).margin(tol));
         CHECK(dod.vertices[13].x() == Approx(max.x()).margin(tol));
         CHECK(dod.vertices[14].x() == Approx(min.x()).margin(tol));

@@ -1,4 +1,4 @@
-// figure::Skeleton and the md5 pose functions (af-format §0, §2.1, §2.4, §5.1, §5.3, §7.3, §7.4, §8 items 19,
+// figure::Skeleton and the md5 pose functions (docs/format.md §0, §2.1, §2.4, §5.1, §5.3, §7.3, §7.4, §8 items 19,
 // 21, 22). Expected values are worked out by hand from the spec, not from the code under test.
 #include <catch2/catch.hpp>
 
@@ -55,7 +55,7 @@ decl::Md5Anim anim(const std::string& hierarchy, const std::string& baseframe, c
     return *a;
 }
 
-// A five-joint skeleton. Hips is turned +90° about Z (X → Y). By af-format §0/§7.3 the file stores the
+// A five-joint skeleton. Hips is turned +90° about Z (X → Y). By docs/format.md §0/§7.3 the file stores the
 // conjugate: the standard quaternion (w = cos 45°, z = sin 45°) is written as components (0, 0, −sin 45°).
 // Head adds +90° about its local X (Y → Z), written (−sin 45°, 0, 0) in the anim; its model-space rotation
 // Rz(90°)·Rx(90°) is the 120° turn about (1,1,1) (X → Y, Y → Z, Z → X), the standard quaternion (½; ½, ½, ½),
@@ -133,7 +133,7 @@ TEST_CASE("a baseframe equal to the bind pose gives load pose == bind pose", "[f
     // (0,7,10).
     CHECK(near(s.loadPose()[2].position, Vector3d(0, 5, 10), 1e-12));
     CHECK(near(s.loadPose()[3].position, Vector3d(0, 7, 10), 1e-12));
-    // Runtime FK starts from the same pose here (af-format §5.1 step 3).
+    // Runtime FK starts from the same pose here (docs/format.md §5.1 step 3).
     const auto runtime = figure::toModelSpace(s.afPoseLocal(), s.parents());
     for (std::size_t i = 0; i < runtime.size(); ++i) CHECK(near(runtime[i], s.loadPose()[i], 1e-12));
     CHECK(s.names() == std::vector<std::string>{"origin", "Hips", "Spine", "Head", "HIPS"});
@@ -156,7 +156,7 @@ TEST_CASE("the load pose is frame 0 blended frameRate/1000 toward frame 1", "[fi
         CHECK(near(s->loadPose()[1].rotation, rotZ(hipsDeg), 1e-9));
         const Vector3d spine = Vector3d(0, 0, 10) + rotZ(hipsDeg) * Vector3d(5 + 10 * w, 0, 0);
         CHECK(near(s->loadPose()[2].position, spine, 1e-9));
-        // The runtime pose is the baseframe (af-format §8 item 19), which differs: build says so.
+        // The runtime pose is the baseframe (docs/format.md §8 item 19), which differs: build says so.
         CHECK(near(s->afPoseLocal()[1].rotation, rotZ(90), 1e-12));
         CHECK(countContaining(d, text::Severity::Warning, "baseframe") == 1);
     }
@@ -219,7 +219,7 @@ TEST_CASE("root translation: zeroed by the loader, then the model offset", "[fig
     CHECK(near(actor.loadPose()[3].position, Vector3d(1, 9, 13), 1e-12));
     const Skeleton entity = build(mesh(kJoints, 5), a, offset, figure::RootTranslation::OffsetAdded);
     CHECK(near(entity.loadPose()[0].position, Vector3d(5, 2, 3), 0));
-    // Runtime FK: baseframe root translation zeroed, plus the offset, under either rule (af-format §5.1).
+    // Runtime FK: baseframe root translation zeroed, plus the offset, under either rule (docs/format.md §5.1).
     CHECK(actor.afPoseLocal()[0].position == offset);
     CHECK(entity.afPoseLocal()[0].position == offset);
     CHECK(actor.afPoseLocal()[1].position == Vector3d(0, 0, 10));
@@ -232,7 +232,7 @@ TEST_CASE("joint lookup, first child and descendants", "[figure][skeleton]") {
     const auto s =
         Skeleton::build(mesh(kJoints, 5), anim(kHierarchy, kBaseframe, {""}, 5, 0), Vector3d::Zero(), d, "dup.def");
     REQUIRE(s);
-    // Case-insensitive, first match wins: "HIPS" (joint 4) is shadowed by "Hips" (af-format §8 item 22).
+    // Case-insensitive, first match wins: "HIPS" (joint 4) is shadowed by "Hips" (docs/format.md §8 item 22).
     CHECK(s->findJoint("hips") == 1);
     CHECK(s->findJoint("HIPS") == 1);
     CHECK(s->findJoint("HEAD") == 3);
@@ -250,7 +250,7 @@ TEST_CASE("joint lookup, first child and descendants", "[figure][skeleton]") {
     CHECK(s->firstChild(4) == 4);
     CHECK(s->firstChild(-1) == 0);
 
-    // `*name`: scan forward until a joint whose parent index is lower than the joint's (af-format §5.3).
+    // `*name`: scan forward until a joint whose parent index is lower than the joint's (docs/format.md §5.3).
     CHECK(s->jointAndDescendants(0) == std::vector<int>{0, 1, 2, 3, 4});
     CHECK(s->jointAndDescendants(1) == std::vector<int>{1, 2, 3});
     CHECK(s->jointAndDescendants(2) == std::vector<int>{2, 3});
@@ -388,7 +388,7 @@ TEST_CASE("corpus: zsec skeletons build and match their exporter's bounds", "[fi
 
         // The af_pose baseframe root translation is (0 0 0), so the exporter's bounds are in our model space.
         for (const decl::Md5Bounds& b : pose->bounds) CHECK(jointBoundsError(s->loadPose(), b) < 1e-3);
-        // Runtime FK from afPoseLocal reproduces the load pose (af-format §8 item 19 holds for these files).
+        // Runtime FK from afPoseLocal reproduces the load pose (docs/format.md §8 item 19 holds for these files).
         const auto runtime = figure::toModelSpace(s->afPoseLocal(), s->parents());
         for (std::size_t i = 0; i < runtime.size(); ++i) CHECK(near(runtime[i], s->loadPose()[i], 1e-9));
 

@@ -1,4 +1,4 @@
-// libFuzzer target, end to end (issue 17): bytes → parseAf → buildFigure on a bundled skeleton → spawn into a
+// libFuzzer target, end to end: bytes → parseAf → buildFigure on a bundled skeleton → spawn into a
 // world that also holds a user body → 60 steps. Oracle: whatever builds simulates to finite state, and the
 // user's own body (filtered so that it never touches the ragdoll) moves exactly as in a world without it.
 #include <cmath>

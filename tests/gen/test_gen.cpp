@@ -1,4 +1,4 @@
-// afb gen (issue 14): rigs in and out of md5, rules, defensive import, and generated figures judged against the
+// afb gen: rigs in and out of md5, rules, defensive import, and generated figures judged against the
 // hand-made zsec figures and on the assimp rigs of the corpus (skipped when ../shared/data is absent).
 #include <catch2/catch.hpp>
 
@@ -112,7 +112,7 @@ TEST_CASE("gen: a rig written as md5mesh + af_pose reads back with the same join
             CHECK(a.influences[k].weight == Approx(b.influences[k].weight).margin(1e-12));
         }
     }
-    // The af_pose's load pose is the bind pose (the model offset puts the root back, af-format §2.1).
+    // The af_pose's load pose is the bind pose (the model offset puts the root back, docs/format.md §2.1).
     const auto skeleton = afb::figure::Skeleton::build(*mesh, *anim, rig.joints[0].bind.position, diags, "test");
     REQUIRE(skeleton);
     for (std::size_t j = 0; j < rig.joints.size(); ++j) {
@@ -334,7 +334,7 @@ std::optional<ZsecComparison> compareZsec(const fs::path& corpus, const std::str
     c.handMassKg = h.totalMassKg;
     c.genMassKg = g.totalMassKg;
     // The generated figure is built on the bind pose; the hand-made one on the zsec af_pose (arms and legs spread):
-    // the generated bodies are put in the af_pose through their joints (af-format §2.5) before comparing.
+    // the generated bodies are put in the af_pose through their joints (docs/format.md §2.5) before comparing.
     if (g.skeleton.jointCount() != h.skeleton.jointCount()) return std::nullopt;
     const auto genBodies = afb::figure::bodiesFromJoints(g, {}, afb::figure::jointsInMetres(h));
     std::vector<Eigen::Vector3d> genCentres;
@@ -479,7 +479,7 @@ std::optional<RigResult> runRig(const fs::path& corpus, const RigCase& c, std::s
 
 } // namespace
 
-// The rigs the issue names: each generates a figure that passes the checks, spawns exactly in its bind pose and
+// The corpus rigs: each generates a figure that passes the checks, spawns exactly in its bind pose and
 // settles from a 1 m drop. quad_skin's armature is scaled 100 in a metre file (200 m): it is generated 1 m tall.
 TEST_CASE("gen: the corpus rigs spawn in their bind pose and settle", "[gen][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);

@@ -1,4 +1,4 @@
-// The ragdoll runtime (af-format §2.5, §5, §6.1): spawn pose, skeleton driving, impulses, rest, velocity
+// The ragdoll runtime (docs/format.md §2.5, §5, §6.1): spawn pose, skeleton driving, impulses, rest, velocity
 // inheritance, drops. Deterministic: fixed 60 Hz step, fixed insertion order.
 #include <catch2/catch.hpp>
 

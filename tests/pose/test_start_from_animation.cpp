@@ -1,4 +1,4 @@
-// Starting a ragdoll from an animation in one call (af-format §2.1, §2.5, §5.4, §7.4): figure::jointsInMetres,
+// Starting a ragdoll from an animation in one call (docs/format.md §2.1, §2.5, §5.4, §7.4): figure::jointsInMetres,
 // figure::jointsFromAnimation, figure::bodyStatesFromAnimation and bullet::spawnOptionsFor, on the bundled
 // humanoid (an actor: its root joint is placed as the load pose placed it).
 #include <catch2/catch.hpp>
@@ -127,7 +127,7 @@ TEST_CASE("bodyStatesFromAnimation reports an animation that does not fit, never
     fewer.baseframe.pop_back();
     CHECK(fails(fewer));
 
-    afb::decl::Md5Anim renamed = walk; // names compare case-sensitively (af-format §7.4)
+    afb::decl::Md5Anim renamed = walk; // names compare case-sensitively (docs/format.md §7.4)
     renamed.hierarchy[1].name = "Pelvis";
     CHECK(fails(renamed));
 

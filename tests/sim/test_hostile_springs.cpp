@@ -1,4 +1,4 @@
-// Issue 17, found by fuzz_e2e: the bundled props with `anchor1` written twice in spring 'cone_bone' (so its anchor2
+// Found by fuzz_e2e: the bundled props with `anchor1` written twice in spring 'cone_bone' (so its anchor2
 // is the model origin, 2 m from the cone it is fixed in) and the bone made 25 times heavier than the cone. The
 // spring starts 1.5 m past its rest length on that 2 m lever: its explicit force was thousands of times what the
 // step can integrate, and the figure reached NaN within a dozen steps. The spring's impulse is now bounded by the
@@ -53,8 +53,8 @@ TEST_CASE("a spring far past its maxLength on a long lever simulates finite and 
     CHECK(findings.str().find("spring 'cone_bone': no anchor2") != std::string::npos);
     CHECK(findings.str().find("above maxLength") != std::string::npos);
 
-    // The energy the figure can release: the quadratic spring's k·x³/3 at its load length (§4.7), and every
-    // body's centre of mass falling to the ground plane.
+    // The energy the figure can release: the quadratic spring's k·x³/3 at its load length (docs/format.md §4.7), and
+    // every body's centre of mass falling to the ground plane.
     const afb::figure::Figure& f = *figure;
     double available = 0;
     for (const afb::figure::FigureConstraint& c : f.constraints) {

@@ -1,4 +1,4 @@
-// Issue 17: a figure that parses must never crash the runtime or put NaN into the world. Every number of the
+// A figure that parses must never crash the runtime or put NaN into the world. Every number of the
 // bundled figures (and, for the full sweep, of the corpus figures) is replaced by hostile values; each variant
 // must end in a clean error, a reported repair or a finite 60-step simulation, never a signal.
 #include <catch2/catch.hpp>
@@ -208,7 +208,7 @@ TEST_CASE("bundled figures survive a deterministic sample of numeric mutations",
     Lcg lcg{17};
     for (const MutationTarget& t : targets) {
         REQUIRE(afb::test::runVariant(t, t.afText) != MutationOutcome::Error);
-        // The crashes of issue 17: a bone width made tiny or huge reached Bullet's GJK.
+        // Crashes this sweep once found: a bone width made tiny or huge reached Bullet's GJK.
         const std::vector<NumberSpan> widths = boneWidths(t);
         for (std::size_t k = 0; k < std::min<std::size_t>(widths.size(), 2); ++k)
             for (const char* value : {"1e-30", "1e-7", "1e5"}) runOne(tally, t, {{widths[k], value}});
@@ -270,8 +270,8 @@ TEST_CASE("an inertiaScale of 1e30 is refused before it overflows the solver", "
 }
 
 // The full sweep: every number of every bundled and corpus figure with every value, plus sampled pairs
-// (AFB_MUTATION_PAIRS per figure, default 200), each dropped for AFB_MUTATION_STEPS steps (default 120, as the
-// issue's `afb drop --steps 120`). AFB_MUTATION_ONLY=text keeps the figures whose label contains it. Run with
+// (AFB_MUTATION_PAIRS per figure, default 200), each dropped for AFB_MUTATION_STEPS steps (default 120, as
+// `afb drop --steps 120`). AFB_MUTATION_ONLY=text keeps the figures whose label contains it. Run with
 // `afb_tests "[.full]" -s` in a Release build (an hour or more).
 TEST_CASE("full numeric mutation sweep", "[.full][mutation-full]") {
     std::vector<MutationTarget> targets = bundledTargets();

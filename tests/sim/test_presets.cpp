@@ -1,4 +1,4 @@
-// Accuracy regression per method preset (README "Methods"): deterministic drops of the bundled humanoid with
+// Accuracy regression per method preset (docs/methods.md): deterministic drops of the bundled humanoid with
 // bounds on the metrics, and every bundled figure dropped with the default method without exploding.
 // The bounds sit above what each preset measures today and below what the next cheaper one gives, so a change
 // that loses a preset's accuracy fails here (timings are never asserted).
@@ -29,7 +29,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
     // Bounds on the 4 s drop of one humanoid (yaw 0) at 60 Hz; "legacy" is the method before presets existed
     // (world iterations 10, joints 20, no extras), kept as the reference the presets must beat.
     const Bounds bounds[] = {
-        // Rest penetration at the accuracy issue's 5 mm for every preset (since hulls hold each corner once and limit
+        // Rest penetration at the accuracy target's 5 mm for every preset (since hulls hold each corner once and limit
         // rows are warm-started: README, Methods points 7 and 11). Measured with position-velocity (point 12), the
         // position pass's static friction (point 14) and the self-contact cap (point 15). A drop is chaotic: one yaw's
         // limit moves by a degree with any change of the method, so a limit bound is the preset's worst over the four
@@ -38,8 +38,8 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
         {"fast", preset("fast"), 0.025, 16, 0.005},           // measured 21.5 mm, 13.3°, 2.7 mm (4 × 4: 14°)
         {"iterative", preset("iterative"), 0.024, 13, 0.005}, // 19.9 mm, 10.0°, 2.7 mm (11°)
         {"accurate", preset("accurate"), 0.012, 5, 0.005},    // 8.8 mm, 3.4°, 2.3 mm (4.5°)
-        // The direct joint solve, the tree position step with limits: 0.1 mm, 0.02°, 0.3 mm. The accuracy issue's
-        // targets are 5 mm / 3° for the default and 1 mm / 2° for exact (the same method since session 15).
+        // The direct joint solve, the tree position step with limits: 0.1 mm, 0.02°, 0.3 mm. The accuracy
+        // targets are 5 mm / 3° for the default and 1 mm / 2° for exact (now the same method).
         {"default", preset("default"), 0.001, 2, 0.005},
         {"exact", preset("exact"), 0.001, 2, 0.005},
     };

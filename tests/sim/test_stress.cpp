@@ -126,7 +126,8 @@ TEST_CASE("stress: +rest runs the figures under their own rest rules, as a game 
     CHECK_FALSE(sim::parseStressMethod("default+sleep", error));
     CHECK(error.find("+rest") != std::string::npos);
     // The 15 Hz drop settles slowly by the matrix's own measure (nothing moving 10 mm or 2° over a second); the
-    // figure's rest rules (§6.1: noMoveTime 1 s, with the humanoid's looser bounds) put it to sleep much sooner.
+    // figure's rest rules (docs/format.md §6.1: noMoveTime 1 s, with the humanoid's looser bounds) put it to
+    // sleep much sooner.
     const sim::StressSetup s = setupOf("humanoid-15hz", bundled());
     const sim::StressResult measured = sim::runStress(s, method("default"));
     const sim::StressResult rules = sim::runStress(s, method("default+rest"));
@@ -189,7 +190,7 @@ TEST_CASE("stress: a rest window judges the spin of its second half only", "[sim
     }
 }
 
-// The CI subset: the default method passes every row of it (the full matrix: afb stress, README "Stability").
+// The CI subset: the default method passes every row of it (the full matrix: afb stress, docs/stability.md).
 TEST_CASE("position tree: a step that leaves more error than it found is not taken", "[sim][stress]") {
     // The 30-link rope of 10 cm links, nearly straight under its own weight: the mass-weighted Newton step closes
     // its 1 mm gaps by turning links 0.3 rad one way and the next the other, and the second-order rest (2–5 mm)

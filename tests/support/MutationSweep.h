@@ -1,5 +1,5 @@
 #pragma once
-// Numeric mutation of `.af` text (issue 17): every number of a figure replaced by hostile values, each variant
+// Numeric mutation of `.af` text: every number of a figure replaced by hostile values, each variant
 // parsed, built and dropped (as `afb drop` does) in a child process so that a crash is counted, not fatal. A
 // variant must end in a clean error, a reported repair, or a finite simulation.
 #include <cmath>
@@ -25,7 +25,7 @@
 
 namespace afb::test {
 
-/// The values each number is replaced by (issue 17). The last four are not numbers to the idTech4 lexer.
+/// The values each number is replaced by. The last four are not numbers to the idTech4 lexer.
 inline const std::vector<std::string>& hostileValues() {
     static const std::vector<std::string> values = {"0",    "-1",  "1e-30", "1e-7", "1e5",
                                                     "1e30", "nan", "inf",   "-inf", "1e999"};

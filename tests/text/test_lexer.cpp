@@ -1,4 +1,4 @@
-// Spec-driven tests of the idTech4 lexer (af-format §1.1, §8 item 12, and the project's error policy).
+// Spec-driven tests of the idTech4 lexer (docs/format.md §1.1, §8 item 12, and the project's error policy).
 #include <catch2/catch.hpp>
 
 #include <cstdint>
@@ -155,7 +155,7 @@ TEST_CASE("lexer: comments", "[lexer]") {
         CHECK(t[2].text == ")");
     }
     SECTION("'/' is a name character, so a name runs into a comment marker written without a space") {
-        // af-format §1.1: with path names allowed, names are [A-Za-z0-9_] plus / \\ : .
+        // docs/format.md §1.1: with path names allowed, names are [A-Za-z0-9_] plus / \\ : .
         const auto t = lexAll("models/x//y");
         REQUIRE(t.size() == 1);
         CHECK(t[0].kind == TokenKind::Name);

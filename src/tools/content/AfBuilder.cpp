@@ -13,7 +13,7 @@ namespace {
 
 Vector3d literal(const AfVector& v) { return {v.literal.x, v.literal.y, v.literal.z}; }
 
-/// Volume of the shape as the engine builds it (figure layer polytopes, exact integration, af-format §3.2);
+/// Volume of the shape as the engine builds it (figure layer polytopes, exact integration, docs/format.md §3.2);
 /// a bone's length comes from the skeleton.
 double volumeOf(const AfShape& s, const Skeleton& sk) {
     const int sides = static_cast<int>(s.numSides);

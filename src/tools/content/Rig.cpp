@@ -17,7 +17,7 @@ decl::Vec3 rounded(const Vector3d& v, int decimals) {
     return {rnd(v.x(), decimals), rnd(v.y(), decimals), rnd(v.z(), decimals)};
 }
 
-/// The md5 way to write a standard rotation: (−x, −y, −z) of the quaternion with w ≥ 0 (af-format §7.3).
+/// The md5 way to write a standard rotation: (−x, −y, −z) of the quaternion with w ≥ 0 (docs/format.md §7.3).
 Vector3d md5Quat(Quaterniond q) {
     q.normalize();
     if (q.w() < 0) q.coeffs() *= -1.0;
