@@ -11,8 +11,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
-#include "afb/bullet/Probes.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Probes.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 

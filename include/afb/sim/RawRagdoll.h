@@ -2,7 +2,7 @@
 // Plain Bullet's version of a figure, the reference every chart shows (`afb chart`, README "Methods"): the same
 // bodies as bullet::Ragdoll, joined by Bullet's own constraints as a plain Bullet user would join them, with none
 // of afbullet's policies. Built from the same figure::Figure and RagdollAsset; measured through the same probes
-// (bullet/Probes.h), so a drop reports it exactly as it reports the adapter. Tools library only: the economy
+// (detail/Probes.h), so a drop reports it exactly as it reports the adapter. Tools library only: the economy
 // benchmark and the stress matrix use it too.
 #include <memory>
 #include <optional>
@@ -15,9 +15,9 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
-#include "afb/bullet/Probes.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Probes.h"
 
 namespace afb::sim {
 
