@@ -182,11 +182,10 @@ struct Method {
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets: "fast", "iterative" (the default's knobs with Bullet's iterative joint solve,
-/// iterativeJoints), "default", "accurate", "exact" (an alias of the default, kept so that recorded results
-/// still name a preset), "legacy" (afbullet 0.1's method: Bullet's solver with 20 joint iterations and none of
-/// the techniques above, kept for comparison) and "multibody" (the reduced-coordinate backend, one step per
-/// frame, 20 iterations, speculative limits).
+/// The named presets: "fast", "iterative" (the default's knobs with Bullet's iterative joint solve, iterativeJoints),
+/// "default", "accurate", "exact" (the default's method under its earlier name, which recorded results still carry),
+/// "legacy" (afbullet 0.1's method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for
+/// comparison) and "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);
