@@ -13,6 +13,10 @@
 //   bullet::RagdollAsset         a figure's shared collision shapes
 //   bullet::Ragdoll              one live ragdoll in your world (bullet::spawnOptionsFor: the entity's flags)
 //   pose::driveSkeleton          md5 joint transforms from the bodies, by the figure's mod rules
+/// \namespace afb
+/// Everything afbullet declares, one nested namespace per layer: text, decl, figure, bullet and pose. Each layer
+/// uses only the ones before it; Bullet appears in afb::bullet alone.
+
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"

@@ -1,4 +1,4 @@
-#include "afb/bullet/Constraints.h"
+#include "afb/detail/Constraints.h"
 
 #include <cmath>
 

@@ -16,9 +16,9 @@
 #include <BulletDynamics/Featherstone/btMultiBodyPoint2Point.h>
 
 #include "EngineFriction.h"
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
 
 namespace afb::bullet::detail {

@@ -10,8 +10,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
-#include "afb/bullet/Probes.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Probes.h"
 
 class btMultiBody;
 class btMultiBodyConstraint;

@@ -13,7 +13,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <btBulletCollisionCommon.h>
 
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
 
 namespace afb::bullet::detail {

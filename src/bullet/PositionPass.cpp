@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "BlockTree.h"
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 
 namespace afb::bullet::detail {
 namespace {

@@ -1,7 +1,7 @@
 // The measurements every ragdoll representation shares: joint errors and the rest rules (docs/format.md §6.1).
-#include "afb/bullet/Probes.h"
+#include "afb/detail/Probes.h"
 
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Limits.h"
 
 namespace afb::bullet {

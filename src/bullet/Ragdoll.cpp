@@ -11,9 +11,9 @@
 #include "EngineFriction.h"
 #include "Multibody.h"
 #include "ObjectArena.h"
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
 
 namespace afb::bullet {

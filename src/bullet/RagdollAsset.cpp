@@ -6,7 +6,7 @@
 #include <LinearMath/btGeometryUtil.h>
 
 #include "PairPruning.h"
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
 #include "afb/figure/MassProperties.h"
 #include "afb/figure/Polytope.h"

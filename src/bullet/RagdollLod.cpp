@@ -4,9 +4,9 @@
 
 #include <Eigen/Dense>
 
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/detail/Convert.h"
 
 namespace afb::bullet {
 namespace {

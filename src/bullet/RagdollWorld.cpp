@@ -15,10 +15,10 @@
 #include "EngineFriction.h"
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 
 namespace afb::bullet {
 namespace {

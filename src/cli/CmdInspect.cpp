@@ -3,7 +3,7 @@
 #include <iostream>
 
 #include "Commands.h"
-#include "afb/figure/DoomMath.h"
+#include "afb/detail/DoomMath.h"
 #include "afb/figure/Load.h"
 
 namespace afb::cli {

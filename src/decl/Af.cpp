@@ -1,6 +1,6 @@
 #include "afb/decl/Af.h"
 
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::decl {
 

@@ -4,8 +4,8 @@
 #include <map>
 
 #include "DeclFile.h"
+#include "afb/detail/Lexer.h"
 #include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {

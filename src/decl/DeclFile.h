@@ -3,7 +3,7 @@
 // blocks, with a default type for untyped ones, and braced sections of other types skipped.
 #include <string_view>
 
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::decl::detail {
 

@@ -5,8 +5,8 @@
 #include <set>
 
 #include "DeclFile.h"
+#include "afb/detail/Lexer.h"
 #include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {

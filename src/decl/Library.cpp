@@ -4,7 +4,7 @@
 #include <set>
 
 #include "afb/decl/AfParser.h"
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::decl {
 namespace fs = std::filesystem;

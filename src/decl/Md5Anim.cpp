@@ -7,8 +7,8 @@
 #include <limits>
 
 #include "Md5Common.h"
+#include "afb/detail/Lexer.h"
 #include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::decl {
 namespace {

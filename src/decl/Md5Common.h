@@ -9,7 +9,7 @@
 #include <string_view>
 
 #include "afb/decl/Af.h"
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::decl::detail {
 

@@ -5,10 +5,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "FigureBuilder.h"
+#include "afb/detail/DoomMath.h"
+#include "afb/detail/Lexer.h"
 #include "afb/figure/Bounds.h"
-#include "afb/figure/DoomMath.h"
 #include "afb/figure/MassProperties.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::figure::detail {
 

@@ -4,9 +4,9 @@
 #include <numbers>
 
 #include "FigureBuilder.h"
+#include "afb/detail/DoomMath.h"
+#include "afb/detail/Lexer.h"
 #include "afb/figure/Bounds.h"
-#include "afb/figure/DoomMath.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::figure::detail {
 

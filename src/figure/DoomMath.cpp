@@ -1,4 +1,4 @@
-#include "afb/figure/DoomMath.h"
+#include "afb/detail/DoomMath.h"
 
 #include <algorithm>
 #include <cmath>

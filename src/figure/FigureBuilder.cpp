@@ -6,8 +6,8 @@
 
 #include <sstream>
 
-#include "afb/figure/DoomMath.h"
-#include "afb/text/Lexer.h"
+#include "afb/detail/DoomMath.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::figure {
 namespace detail {

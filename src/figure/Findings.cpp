@@ -4,8 +4,8 @@
 #include <map>
 
 #include "FigureBuilder.h"
+#include "afb/detail/DoomMath.h"
 #include "afb/figure/Collision.h"
-#include "afb/figure/DoomMath.h"
 #include "afb/figure/Limits.h"
 
 namespace afb::figure::detail {

@@ -4,7 +4,7 @@
 
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Anim.h"
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::figure {
 

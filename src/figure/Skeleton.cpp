@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::figure {
 namespace {

@@ -9,8 +9,8 @@
 
 #include "Fit.h"
 #include "afb/decl/AfParser.h"
+#include "afb/detail/DoomMath.h"
 #include "afb/figure/Collision.h"
-#include "afb/figure/DoomMath.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Skeleton.h"
 

@@ -12,7 +12,7 @@
 #include <LinearMath/btScalar.h>
 #include <time.h>
 
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Lod.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/RawRagdoll.h"

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
 
 namespace afb::sim {

@@ -14,7 +14,7 @@
 #include <time.h>
 
 #include "RestWindow.h"
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Stabilize.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/RawRagdoll.h"

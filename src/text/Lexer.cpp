@@ -1,4 +1,4 @@
-#include "afb/text/Lexer.h"
+#include "afb/detail/Lexer.h"
 
 #include <charconv>
 #include <cmath>

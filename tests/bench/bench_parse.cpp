@@ -19,8 +19,8 @@
 
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Md5Mesh.h"
+#include "afb/detail/Lexer.h"
 #include "afb/text/Diagnostics.h"
-#include "afb/text/Lexer.h"
 
 namespace {
 

@@ -7,9 +7,9 @@
 #include <memory>
 
 #include "FigureFixture.h"
-#include "afb/bullet/Constraints.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Limits.h"
 #include "afb/sim/Scene.h"
 

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "EntityFixture.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Lod.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/Scene.h"

@@ -11,11 +11,11 @@
 
 #include "EntityFixture.h"
 #include "FigureFixture.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/detail/Convert.h"
 #include "afb/sim/Report.h"
 #include "afb/sim/Scene.h"
 #include "bullet/PositionPass.h"

@@ -5,8 +5,8 @@
 #include <cstdlib>
 #include <string_view>
 
+#include "afb/detail/Lexer.h"
 #include "afb/text/Diagnostics.h"
-#include "afb/text/Lexer.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string_view src(reinterpret_cast<const char*>(data), size);

@@ -13,7 +13,7 @@
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Def.h"
 #include "afb/decl/Library.h"
-#include "afb/figure/DoomMath.h"
+#include "afb/detail/DoomMath.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 #include "afb/gen/Generate.h"

@@ -7,8 +7,8 @@
 
 #include "EntityFixture.h"
 #include "TestSupport.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Load.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/sim/Scene.h"

@@ -9,7 +9,7 @@
 
 #include "MutationSweep.h"
 #include "TestSupport.h"
-#include "afb/bullet/Constraints.h"
+#include "afb/detail/Constraints.h"
 
 namespace {
 

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "EntityFixture.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Convert.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"

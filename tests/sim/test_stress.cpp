@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "EntityFixture.h"
-#include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Convert.h"
 #include "afb/sim/Scene.h"
 #include "afb/sim/Stress.h"
 #include "sim/RestWindow.h"

@@ -16,12 +16,12 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/decl/AfParser.h"
 #include "afb/decl/Library.h"
+#include "afb/detail/Lexer.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/Scene.h"
 #include "afb/text/Files.h"
-#include "afb/text/Lexer.h"
 
 namespace afb::test {
 

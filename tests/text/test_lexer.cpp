@@ -6,8 +6,8 @@
 #include <string_view>
 #include <vector>
 
+#include "afb/detail/Lexer.h"
 #include "afb/text/Diagnostics.h"
-#include "afb/text/Lexer.h"
 
 using afb::text::Diagnostics;
 using afb::text::Lexer;

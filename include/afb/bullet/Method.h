@@ -1,7 +1,7 @@
 #pragma once
 // How a ragdoll is simulated: one plain value holding every knob that trades speed against accuracy, chosen per
 // world (the world-level knobs) and per ragdoll (the rest), and recorded with every result (drop reports,
-// goldens, charts). Named presets go from fast to exact; the README gives their measured numbers.
+// goldens, charts). Named presets go from fast to exact; docs/methods.md describes each knob and preset.
 #include <optional>
 #include <span>
 #include <string>
@@ -9,6 +9,8 @@
 #include <variant>
 #include <vector>
 
+/// The Bullet layer: a Figure as a live ragdoll in a btDiscreteDynamicsWorld (Ragdoll), its shared shapes
+/// (RagdollAsset), how it is stepped (Method) and the world-level parts of that (RagdollWorld, RagdollSolver).
 namespace afb::bullet {
 
 /// Which representation simulates the figure.
@@ -38,7 +40,7 @@ inline constexpr double kImpactTravelM = 0.05;
 struct Method {
     /// The preset the value started from ("default", "fast", …), for reports; overrides do not rename it.
     std::string name = "default";
-    Backend backend = Backend::Rigid;
+    Backend backend = Backend::Rigid; ///< which representation simulates the figure (chosen at spawn)
 
     // --- world-level knobs (applied to the world by RagdollWorld; shared by everything in that world) -----------
     /// Substeps per frame: each frame of dt is stepped as `substeps` steps of dt / substeps.
@@ -47,9 +49,8 @@ struct Method {
     /// ragdoll, a game's body) close on each other fast: a frame whose contacts of the last step close faster than
     /// kImpactTravelM per substep is stepped in as many more substeps as keep it under that, up to this number
     /// (1: off; `substeps` stays the least). A single ragdoll (its own bodies, the ground, static objects) never
-    /// takes more. Substeps are the world's: the frame's other objects take them too. `afb stress`'s pile of 160
-    /// humanoids, 1 substep: two feet 5.4 cm inside each other at 1.03 s; with 4 here it holds every bound for the
-    /// 30 s (deepest 30 mm), for 42 % of the CPU of 3 substeps throughout (README: Stability). On in every
+    /// takes more. Substeps are the world's: the frame's other objects take them too. It keeps colliding ragdolls
+    /// out of each other for far less CPU than more substeps on every frame (docs/stability.md). On in every
     /// preset but legacy (afbullet 0.1's method).
     int impactSubsteps = 4;
     /// Sequential-impulse iterations of the world's solver (contacts, and joints without their own count).
@@ -74,9 +75,9 @@ struct Method {
     double warmStartingFactor = 0.85;
     /// Friction rows per contact point: 1 (Bullet's default: one row along the sliding direction, or along an
     /// arbitrary tangent when the point barely moves, so nothing holds the other tangent) or 2 (both tangents,
-    /// SOLVER_USE_2_FRICTION_DIRECTIONS). With one, a resting limb under `directJoints` was kicked to 1–2 rad/s
-    /// every few steps and never came to rest (README: Methods). 2 in default, exact and multibody (Bullet's multibody
-    /// world sets it itself); the iterative presets lose stress runs with it (their 100 m and 15 Hz drops).
+    /// SOLVER_USE_2_FRICTION_DIRECTIONS). With one, nothing holds a resting limb under `directJoints` along the
+    /// other tangent, and it does not come to rest (docs/methods.md). 2 in default, exact and multibody (Bullet's
+    /// multibody world sets it itself); 1 in the iterative presets.
     int frictionDirections = 2;
     /// Nonlinear Gauss–Seidel position sweeps after each substep over every ragdoll's joints, limits and
     /// contacts (Jolt's position steps, "post-stabilisation"): bodies are moved, velocities are left as the
@@ -87,14 +88,14 @@ struct Method {
     /// After the sweeps, Newton steps over each ragdoll's joint tree (its bodies' masses, Baraff's factorisation,
     /// as the direct velocity solve uses), which close every joint at once instead of one after another:
     /// 0 = off; 1 = the anchors (to 0.1 mm); 2 = also the locked axes and the limit rows past their limit. The
-    /// step does not include contacts: 2 holds limits to tenths of a degree but pushes limbs deeper into the
-    /// ground (README: Methods). Joints that close a loop and sliders are left to the sweeps.
+    /// step does not include contacts: 2 holds limits closely but can push limbs deeper into the ground
+    /// (docs/methods.md). Joints that close a loop and sliders are left to the sweeps.
     int positionTree = 2;
     /// Velocities follow the position pass: a body the pass moved back against the motion its velocity made in the
     /// substep loses that part of its velocity (the fraction of v·dt the pass undid along v, and the same for ω).
-    /// Without it a velocity the pass reverts every substep lives on: a lying leg kept twisting at 11 rad/s at
-    /// 30 Hz while its pose stood still, and figures never came to rest (README: Methods). Only ever reduces a
-    /// speed along its own direction. Rigid backend; the multibody backend's sweeps ignore it.
+    /// Without it a velocity the pass reverts every substep lives on: a limb keeps spinning while its pose stands
+    /// still, and the figure never comes to rest (docs/methods.md). Only ever reduces a speed along its own
+    /// direction. Rigid backend; the multibody backend's sweeps ignore it.
     bool positionVelocity = true;
     /// Full contact manifolds on planes: hulls and boxes against a static plane take their contact points from
     /// the (up to four) vertices that come nearest the plane within the step, kept from step to step by vertex
@@ -112,9 +113,9 @@ struct Method {
     /// times the pair's weight per step (m_a + m_b)·g·dt, g the world's gravity but at least 9.81 m/s² (a
     /// weightless world would otherwise cold-start every self-contact); 0: no bound (Bullet's warm start). A forearm
     /// pressed into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy;
-    /// warm-started, the contact's impulse and the elbow's opposing row grew by 3 N·s every step to 50 N·s (3 kN) while
-    /// the forearm sank 5 cm into the torso (README: Methods). 10, not less: at 3 a humanoid's arm lying under its
-    /// torso came 27 mm off its elbow at rest. Needs a RagdollSolver; no effect without it.
+    /// warm-started without a bound, the contact's impulse and the elbow's opposing row grow every step while the
+    /// forearm sinks into the torso (docs/methods.md). Much lower bounds let a limb lying under the torso pull off
+    /// its joint. Needs a RagdollSolver; no effect without it.
     double selfContactCap = 10;
 
     // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
@@ -137,8 +138,7 @@ struct Method {
     bool jointWarmStarting = true;
     /// Warm-started limit rows (cone, pyramid and hinge-range rows, speculative or not): they start from the
     /// warm-starting factor times their last impulse too, so a limit carrying a limb's weight does not give a little
-    /// every substep. Needs a RagdollSolver; no effect without it. Left out of the joints' warm start until Methods
-    /// point 11 was found (README): what it was blamed for was a hull holding its corners several times.
+    /// every substep. Needs a RagdollSolver; no effect without it.
     bool limitWarmStarting = true;
     /// Direct joint solve: every solver iteration solves the figure's joints (anchors and locked axes) exactly, one
     /// linear system per ragdoll, and each contact, friction and limit row moves the whole ragdoll as its joints
@@ -146,55 +146,52 @@ struct Method {
     /// stops the body above it within the iteration instead of one link per iteration. Needs the world's solver to
     /// be a RagdollSolver; set for the world by RagdollWorld from its method (a ragdoll takes part when its own
     /// method has it on; without a RagdollSolver the world falls back to the iterative solve, methodInForce). On in
-    /// default and exact since session 15.
+    /// default and exact.
     bool directJoints = true;
     /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
     /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
     /// nothing and cannot give. Every figure body keeps its pose (bodyTransforms, the skeleton). Rigid backend only.
     /// Spawned through a RagdollWorld, each part of a merged body makes the contacts it made unmerged (speculative
     /// reach, self-collision pairs); in a plain world Bullet's compound algorithm runs. On in fast, default and
-    /// exact; off in accurate (its 1 m drop: a forearm into the torso at the right shoulder), legacy and multibody
-    /// (README: Economy).
+    /// exact; off in accurate, legacy and multibody (docs/performance.md).
     bool mergeFixed = true;
     /// Self-collision pairs that overlap at the load pose (RagdollAsset::overlappingPairs) do not collide. Their
     /// contact fights the joints from the first step; held by limits that do not let them part (the AF guide's
-    /// warning case, `afb stress`'s overlap row), it never ends: under the direct joint solve the figure walked
-    /// 2.2 m in 30 s and never rested (README: Stability). Jolt does the same for pairs overlapping in a given pose.
-    /// Off in legacy (the engine's behaviour). Both backends.
+    /// warning case), it never ends: the figure creeps across the ground and never rests (docs/stability.md).
+    /// Jolt does the same for pairs overlapping in a given pose. Off in legacy (the engine's behaviour). Both
+    /// backends.
     bool exemptOverlapping = true;
     /// A universal joint is our constant-velocity constraint (UniversalConstraint: the anchors, and no relative
     /// spin about the bisector of the two shafts, a row that always exists) instead of btConeTwistConstraint with a
     /// twist span of 0, whose twist row exists only while the twist is above zero and whose axis turns over with
-    /// its sign: at rest the hips, shoulders and waist toggled it every few steps, and a leg held by joint friction
-    /// kicked at 1.5 rad/s every 13–16 steps (README: Stability). On in default and accurate; off in fast,
-    /// iterative and legacy (iterativeJoints turns it off: under Bullet's iterative joint solve, `fast` let a zsec
-    /// hip come 138 mm apart in a 100 m drop, 72 mm with the cone-twist). Rigid backend.
+    /// its sign: at rest the hips, shoulders and waist toggle it, and a leg held by joint friction is kicked every
+    /// few steps (docs/stability.md). On in default and accurate; off in fast, iterative and legacy
+    /// (iterativeJoints turns it off: under Bullet's iterative joint solve the cone-twist holds the hips better).
+    /// Rigid backend.
     bool constantVelocityUniversal = true;
     /// Contact friction rows move the whole ragdoll as its joints let it (the direct joint solve's response, as
     /// its contact and limit rows do) instead of Bullet's one-body response (directJoints only; a contact between
     /// two bodies of one ragdoll keeps Bullet's response either way). With one-body friction, the friction rows
     /// that come last in each iteration leave the joints they disturbed for the next iteration's joint solve: a
-    /// humanoid lying still ends every step with its hips and knees turning apart at 0.16–0.18 rad/s, which the
-    /// position pass then takes back. Through the figure the solve converges (joint rows within 0.002 rad/s) and the
-    /// hard rows of `afb stress` come to rest 15 % sooner on average, for 17 % more instructions per awake
-    /// body-step. Off in every preset (README: Methods, point 20).
+    /// humanoid lying still ends every step with its hips and knees turning apart, which the position pass then
+    /// takes back. Through the figure the solve converges and figures come to rest sooner, for more work per awake
+    /// body-step. Off in every preset (docs/methods.md, docs/performance.md).
     bool frictionThroughFigure = false;
 
+    /// Equal when the name and every knob are.
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets: "fast", "iterative" (the default until session 15: the default's knobs with Bullet's
-/// iterative joint solve, iterativeJoints), "default", "accurate", "exact" (the default's name from before
-/// session 15; the same method), "legacy" (afbullet 0.1's
-/// method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for comparison) and
-/// "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
+/// The named presets: "fast", "iterative" (the default's knobs with Bullet's iterative joint solve, iterativeJoints),
+/// "default", "accurate", "exact" (the default's method under its earlier name, which recorded results still carry),
+/// "legacy" (afbullet 0.1's method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for
+/// comparison) and "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
 std::span<const std::string_view> methodPresetNames();
 /// The preset called `name`, or nullopt for an unknown name.
 std::optional<Method> methodPreset(std::string_view name);
 /// `method` with Bullet's iterative joint solve in place of the direct one: direct-joints off, position-tree 0,
 /// friction-directions 1, universal joints as btConeTwist (constantVelocityUniversal off). Of the default, the
-/// preset "iterative" (the default until session 15), and what a world without a RagdollSolver runs
-/// (methodInForce).
+/// preset "iterative", and what a world without a RagdollSolver runs (methodInForce).
 Method iterativeJoints(Method method);
 
 /// One knob of a Method, by the name the CLI, JSON reports and goldens use ("substeps", "joint-iterations", …).
@@ -219,7 +216,9 @@ const MethodKnob* findKnob(std::string_view name);
 /// "default (substeps 1, iterations 10, …)": the preset name and every knob, for reports.
 std::string describe(const Method& m);
 
+/// The backend's name as knobs spell it: "rigid" or "multibody".
 std::string_view toString(Backend b);
+/// The policy's name as knobs spell it: "off" or "fast-bodies".
 std::string_view toString(CcdPolicy c);
 
 } // namespace afb::bullet

@@ -11,8 +11,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
-#include "afb/bullet/Probes.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Probes.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 
@@ -24,23 +24,24 @@ class MultibodyRagdoll;
 class ObjectArena;
 } // namespace detail
 
-/// Restitution of every AF body (af-format §3.4: the engine's fixed value; it applies it above 2 units/s only).
+/// Restitution of every AF body (docs/format.md §3.4: the engine's fixed value; it applies it above 2 units/s only).
 inline constexpr double kBodyRestitution = 0.4;
 
 class Ragdoll;
 
 /// What tripped a ragdoll's explosion guard.
 struct GuardTrip {
+    /// The bound that was crossed.
     enum class Cause {
         NonFinite,   ///< a body's pose or velocity became NaN or infinite
         Speed,       ///< a body moved faster than ExplosionGuard::maxSpeedMps
         AnchorError, ///< a constraint's anchors came further apart than ExplosionGuard::maxAnchorErrorM
     };
-    Cause cause = Cause::NonFinite;
-    int body = -1;            ///< the body (Speed, NonFinite), or −1
-    int constraint = -1;      ///< the figure constraint (AnchorError), or −1
-    double value = 0;         ///< the speed (m/s) or the anchor error (m) that tripped it; 0 for NonFinite
-    double activeSeconds = 0; ///< Ragdoll::activeSeconds() when it tripped
+    Cause cause = Cause::NonFinite; ///< the bound that was crossed
+    int body = -1;                  ///< the body (Speed, NonFinite), or −1
+    int constraint = -1;            ///< the figure constraint (AnchorError), or −1
+    double value = 0;               ///< the speed (m/s) or the anchor error (m) that tripped it; 0 for NonFinite
+    double activeSeconds = 0;       ///< Ragdoll::activeSeconds() when it tripped
 };
 /// "non-finite", "speed", "anchor-error".
 std::string_view toString(GuardTrip::Cause cause);
@@ -48,12 +49,12 @@ std::string_view toString(GuardTrip::Cause cause);
 /// The explosion guard: after every substep, a ragdoll whose state is non-finite or beyond these bounds is put back
 /// to its state after the last good substep and frozen (zero velocities, asleep, at rest until touched or woken;
 /// its contacts and warm-started impulses dropped), so a NaN never reaches the solver again and never another
-/// body of the world. Costs a pass over the bodies per substep (README: Stability).
+/// body of the world. Costs a pass over the bodies per substep (docs/stability.md).
 struct ExplosionGuard {
-    bool enabled = true;
+    bool enabled = true;        ///< run the guard after every substep (and in checkGuard)
     double maxSpeedMps = 100.0; ///< a body faster than this trips the guard (≤ 0: speed not checked)
     /// A constraint whose anchors are further apart than this trips it (≤ 0: not checked). A metre is a joint
-    /// torn open beyond any doubt; ragdolls recover from gaps of decimetres (plain Bullet at 10 m: 17 cm).
+    /// torn open beyond any doubt; ragdolls recover from gaps of decimetres.
     double maxAnchorErrorM = 1.0;
     /// Called after the ragdoll was restored and frozen (from inside the world's step or RagdollWorld::step: do not
     /// remove the ragdoll here; note it and remove it after the step).
@@ -62,16 +63,16 @@ struct ExplosionGuard {
 
 /// Velocity clamps (opt-in): after every substep, a body's linear and angular speeds are scaled down to these
 /// bounds (0: no bound). A clamp caps what one bad solve can throw a body to; it also caps honest motion, so set it
-/// above anything the game needs (README: Stability).
+/// above anything the game needs (docs/stability.md).
 struct VelocityClamp {
-    double maxLinearMps = 0;
-    double maxAngularRadps = 0;
+    double maxLinearMps = 0;    ///< largest speed of a body's centre of mass, m/s (0: no bound)
+    double maxAngularRadps = 0; ///< largest spin of a body, rad/s (0: no bound)
 };
 
 /// A body's velocities: of its centre of mass (m/s) and its spin (rad/s), world.
 struct BodyVelocity {
-    btVector3 linearMps{0, 0, 0};
-    btVector3 angularRadps{0, 0, 0};
+    btVector3 linearMps{0, 0, 0};    ///< velocity of the centre of mass, m/s, world
+    btVector3 angularRadps{0, 0, 0}; ///< angular velocity, rad/s, world
 };
 
 /// Which impulses Ragdoll::applyBodyImpulse applies.
@@ -87,18 +88,19 @@ struct SpawnOptions {
     /// Bullet collision group of every body (the caller's choice).
     int collisionGroup = btBroadphaseProxy::DefaultFilter;
     /// Bullet collision mask of every body; bodies attached to the world by a collision-disabling constraint
-    /// also drop btBroadphaseProxy::StaticFilter (the engine lets them pass through world geometry, §6.2).
+    /// also drop btBroadphaseProxy::StaticFilter (the engine lets them pass through world geometry; docs/format.md
+    /// §6.2).
     int collisionMask = btBroadphaseProxy::AllFilter;
     /// How the ragdoll is simulated. Its per-ragdoll knobs (joint iterations, limit rows, continuous collision)
     /// apply here; its world-level knobs (substeps, solver, position pass) are the world's: see RagdollWorld.
     Method method = {};
-    /// Spawn at rest until touched (entityDef `"nodrop" "1"`, or the seed page's `"sleep" "1"`).
+    /// Spawn at rest until touched (entityDef `"nodrop" "1"`, or the id modding page's `"sleep" "1"`).
     bool startAtRest = false;
-    /// Apply the figure's rest rules (§6.1) and put it to sleep when they say so (the engine's comeToRest).
-    /// Off: the ragdoll never rests by itself (putToRest still works).
+    /// Apply the figure's rest rules (docs/format.md §6.1) and put it to sleep when they say so (the engine's
+    /// comeToRest). Off: the ragdoll never rests by itself (putToRest still works).
     bool comeToRest = true;
-    /// The engine's contact friction (§4.8): min of the two bodies' values between ragdoll bodies, the ragdoll
-    /// body's own value against anything else, instead of Bullet's product. Bullet has one process-wide contact
+    /// The engine's contact friction (docs/format.md §4.8): min of the two bodies' values between ragdoll bodies, the
+    /// ragdoll body's own value against anything else, instead of Bullet's product. Bullet has one process-wide contact
     /// callback for it: it is in force while an EngineContactFriction guard (every RagdollWorld holds one) lives;
     /// Ragdoll::engineContactFriction() says whether it is.
     bool engineContactFriction = true;
@@ -148,6 +150,7 @@ class Ragdoll {
     const std::shared_ptr<const RagdollAsset>& asset() const { return m_asset; }
     /// The world the ragdoll lives in.
     btDynamicsWorld& world() { return m_world; }
+    /// The world the ragdoll lives in.
     const btDynamicsWorld& world() const { return m_world; }
     /// The method it was spawned with.
     const Method& method() const { return m_method; }
@@ -164,18 +167,21 @@ class Ragdoll {
     /// The collision object of figure body `i` (a btRigidBody, or a btMultiBodyLinkCollider); its world
     /// transform is the body frame (centre of mass, principal axes).
     btCollisionObject& collisionObject(int i);
+    /// The collision object of figure body `i` (see the non-const overload).
     const btCollisionObject& collisionObject(int i) const;
     /// Rigid body of figure body `i`; its transform is the body frame (centre of mass, principal axes), unless the
     /// body was merged with others (Method::mergeFixed, setLod): then it is their compound, whose frame is the
     /// union's (bodyInRigid(i) places the body in it). Rigid backend only: throws std::logic_error on a multibody
     /// ragdoll (bodyState() and collisionObject() serve both).
     btRigidBody& body(int i);
+    /// Rigid body of figure body `i` (see the non-const overload); rigid backend only.
     const btRigidBody& body(int i) const;
     /// The Bullet rigid bodies (rigid backend): one per figure body, or fewer with Method::mergeFixed or setLod;
     /// 0 for a multibody ragdoll.
     int rigidBodyCount() const { return static_cast<int>(m_bodies.size()); }
     /// Rigid body `k` of rigidBodyCount(); throws std::logic_error on a multibody ragdoll.
     btRigidBody& rigidBody(int k);
+    /// Rigid body `k` of rigidBodyCount(); throws std::logic_error on a multibody ragdoll.
     const btRigidBody& rigidBody(int k) const;
     /// The rigid body (index for rigidBody) carrying figure body `i`.
     int rigidIndexOf(int i) const { return m_layout->rigidOf[static_cast<std::size_t>(i)]; }
@@ -184,7 +190,7 @@ class Ragdoll {
     /// How the figure's bodies map to rigid bodies (the asset's for this ragdoll's method, or its level of detail's).
     const RigidLayout& layout() const { return *m_layout; }
 
-    /// Switches to a level of detail (figure::lodFromNames, figure::automaticLod; README: Economy): each group of
+    /// Switches to a level of detail (figure::lodFromNames, figure::automaticLod; docs/performance.md): each group of
     /// `level` becomes one rigid body, a compound of its bodies' shapes as they are placed now, with their exact
     /// combined mass properties at this pose, so nothing moves: the joints inside a group hold their current
     /// relative pose (and their current error) until setFullDetail(). Each rigid body gets its bodies' total
@@ -202,6 +208,7 @@ class Ragdoll {
     /// The main Bullet constraint of figure constraint `i` (null for a fixed constraint inside a merged body).
     /// Rigid backend only: throws std::logic_error on a multibody ragdoll.
     btTypedConstraint* constraint(int i);
+    /// The main Bullet constraint of figure constraint `i` (see the non-const overload); rigid backend only.
     const btTypedConstraint* constraint(int i) const;
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); 0 for a
     /// multibody ragdoll.
@@ -212,6 +219,7 @@ class Ragdoll {
     /// Bullet constraint `k` of those, in the order they were added to the world; throws std::logic_error on a
     /// multibody ragdoll.
     btTypedConstraint& bulletConstraint(int k);
+    /// Bullet constraint `k` (see the non-const overload); throws std::logic_error on a multibody ragdoll.
     const btTypedConstraint& bulletConstraint(int k) const;
 
     /// The constraint frame of figure constraint `i` as attached to body1 and to body2 (or the world), in world
@@ -228,8 +236,9 @@ class Ragdoll {
         return m_rigidFrames[static_cast<std::size_t>(i)];
     }
 
-    /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
+    /// How far a figure constraint is from holding (the probes' type).
     using JointError = bullet::JointError;
+    /// How far figure constraint `i` is from holding now (what accuracy metrics read, for any backend).
     JointError jointError(int i) const;
 
     /// World transforms of every body (body frames: centre of mass, principal axes), metres.
@@ -251,9 +260,9 @@ class Ragdoll {
     /// changes nothing when the number of velocities is not bodyCount() (or, multibody, one is not finite).
     [[nodiscard]] bool setBodyVelocities(std::span<const BodyVelocity> velocities);
 
-    /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints,
-    /// §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine units,
-    /// 500·metresPerUnit N·s) or on a joint no body contains is ignored: returns false.
+    /// Applies `impulse` (N·s, world) at `worldPoint` to the body containing md5 joint `joint` (containedJoints;
+    /// docs/format.md §5.3) and wakes the ragdoll. As in the engine, an impulse below the wake threshold (500 engine
+    /// units, 500·metresPerUnit N·s) or on a joint no body contains is ignored: returns false.
     bool applyImpulse(int joint, const btVector3& impulse, const btVector3& worldPoint);
     /// The same on figure body `body` (figureBodyOf a ray hit, say); false for a body out of range. With
     /// ImpulseRule::Always the wake threshold does not apply (a scripted push of any size).
@@ -267,8 +276,8 @@ class Ragdoll {
     /// The wake threshold of applyImpulse, N·s.
     double impulseThresholdNs() const { return 500.0 * figure().units.metresPerUnit; }
 
-    /// True while the figure is at rest by its own rules (§6.1). Spawned through a RagdollWorld, its bodies are then
-    /// frozen (frozen()); in a plain world they are asleep in Bullet.
+    /// True while the figure is at rest by its own rules (docs/format.md §6.1). Spawned through a RagdollWorld, its
+    /// bodies are then frozen (frozen()); in a plain world they are asleep in Bullet.
     bool atRest() const;
     /// True while the ragdoll rests frozen (only when spawned through a RagdollWorld): its constraints are out of
     /// the world and its bodies are static objects of the StaticFilter group that test no pairs against static
@@ -286,10 +295,11 @@ class Ragdoll {
     /// The deepest contact of the ragdoll's bodies at the moment it froze (penetration in metres, 0 for none, and
     /// the two objects): a frozen ragdoll has no contacts in the world, but it still rests that deep.
     struct FrozenContact {
-        double depthM = 0;
-        const btCollisionObject* a = nullptr;
-        const btCollisionObject* b = nullptr;
+        double depthM = 0;                    ///< penetration depth, metres; 0 for no contact
+        const btCollisionObject* a = nullptr; ///< one object of that contact (null for none)
+        const btCollisionObject* b = nullptr; ///< the other object of that contact (null for none)
     };
+    /// The deepest contact at the moment the ragdoll froze (see FrozenContact).
     const FrozenContact& frozenContact() const { return m_frozenContact; }
     /// Seconds simulated since the ragdoll last woke (the engine's activateTime).
     double activeSeconds() const;

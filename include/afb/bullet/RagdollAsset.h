@@ -28,7 +28,7 @@ struct RigidLayout {
         std::vector<int> bodies; ///< the figure bodies it carries, ascending
         /// The heaviest of them (lowest index on ties): its friction, damping and restitution are the rigid's.
         int representative = 0;
-        double massKg = 0;
+        double massKg = 0;                                     ///< the sum of its bodies' masses, kg
         Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Zero(); ///< principal moments (figure::combineRigidParts)
         /// The rigid's frame (centre of mass, principal axes), model space, at the load pose; for a level of detail
         /// (RagdollAsset::layoutAt, Ragdoll::setLod), world space at the switch.
@@ -39,7 +39,7 @@ struct RigidLayout {
         /// Bullet's bounding sphere radius of the shape (btCollisionShape::getBoundingSphere), metres.
         double boundingRadius = 0;
     };
-    std::vector<Rigid> rigids;
+    std::vector<Rigid> rigids;                  ///< the Bullet rigid bodies, ordered by their first figure body
     std::vector<int> rigidOf;                   ///< per figure body: index into rigids
     std::vector<figure::Transform> bodyInRigid; ///< per figure body: its body frame in its rigid's frame
     std::vector<btTransform> bodyInRigidBt;     ///< the same in Bullet's precision
@@ -48,10 +48,11 @@ struct RigidLayout {
     /// The same less the figure pairs in RagdollAsset::overlappingPairs (Method::exemptOverlapping): a rigid pair
     /// stays when one of its figure pairs is not overlapping.
     std::vector<std::pair<int, int>> contactPairsApart;
-    /// The rigid pairs (i < j, ascending) that never collide: those not in contactPairs (not in contactPairsApart),
-    /// and those joined by a constraint that disables collision between its bodies (as Bullet's constraint
-    /// references would have them).
-    std::vector<std::pair<int, int>> ignoredPairs, ignoredPairsApart;
+    /// The rigid pairs (i < j, ascending) that never collide: those not in contactPairs, and those joined by a
+    /// constraint that disables collision between its bodies (as Bullet's constraint references would have them).
+    std::vector<std::pair<int, int>> ignoredPairs;
+    /// The same with contactPairsApart in place of contactPairs (Method::exemptOverlapping).
+    std::vector<std::pair<int, int>> ignoredPairsApart;
     /// Whether figure constraint `i` joins two bodies of one rigid (then it has no Bullet constraint).
     std::vector<bool> internal;
 };
@@ -80,7 +81,7 @@ class RagdollAsset {
     const std::vector<std::pair<int, int>>& contactPairs() const { return m_contactPairs; }
     /// Self-collision pairs the figure's joints keep apart (ascending): along every joint path between the two
     /// bodies, within the joints' limits widened by 10° each, they stay more than 2 cm apart, so a ragdoll never
-    /// tests them for contact. Computed once per figure (issue 12).
+    /// tests them for contact. Computed once per figure.
     const std::vector<std::pair<int, int>>& prunedPairs() const { return m_prunedPairs; }
     /// The contactPairs() whose bodies overlap by more than figure::kTouchToleranceM at the load pose (ascending).
     /// Their contact fights the joints from the first step, and when the limits do not let them separate it never
@@ -103,6 +104,8 @@ class RagdollAsset {
     std::pair<std::size_t, std::size_t> instanceArenaHint() const {
         return {m_arenaBytes.load(std::memory_order_relaxed), m_arenaObjects.load(std::memory_order_relaxed)};
     }
+    /// Records what one instance's Bullet objects took, raising instanceArenaHint. Thread-safe; called by Ragdoll,
+    /// not for callers.
     void noteInstanceArena(std::size_t bytes, std::size_t objects) const {
         for (std::size_t seen = m_arenaBytes.load(std::memory_order_relaxed);
              bytes > seen && !m_arenaBytes.compare_exchange_weak(seen, bytes, std::memory_order_relaxed);) {

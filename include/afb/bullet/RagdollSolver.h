@@ -6,7 +6,7 @@
 // carries its own weight through its joints and limits, and the solver's iterations must rebuild those impulses
 // along the chain every step; what they fail to rebuild shows as joints that sag apart and limits that give.
 // This solver starts each tracked row from the world's warm-starting factor times its last impulse, as Bullet
-// does for contacts (README: Methods).
+// does for contacts (docs/methods.md).
 #include <functional>
 #include <memory>
 #include <vector>
@@ -24,7 +24,9 @@ namespace afb::bullet {
 /// Bullet limit that engages or releases starts its rows from zero). One world, one thread.
 class RagdollSolver : public btSequentialImpulseConstraintSolver {
   public:
+    /// A solver tracking nothing: until something is tracked, it solves as btSequentialImpulseConstraintSolver.
     RagdollSolver();
+    /// Releases the tracking tables (the tracked constraints belong to their ragdolls).
     ~RagdollSolver() override;
     RagdollSolver(const RagdollSolver&) = delete;
     RagdollSolver& operator=(const RagdollSolver&) = delete;
@@ -43,10 +45,12 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// the group's effective mass at that row; contact friction (unless setFrictionThroughGroups) and joint friction
     /// keep Bullet's response, and the next joint solve restores what they disturb. Off: Bullet's iterations.
     void setDirectJoints(bool on);
+    /// Whether the direct joint solve is on (setDirectJoints).
     bool directJoints() const;
     /// Under the direct joint solve, contact friction rows move the whole group too (Method::frictionThroughFigure),
     /// except between two bodies of one group; off (the default), they keep Bullet's one-body response.
     void setFrictionThroughGroups(bool on);
+    /// Whether friction rows move the whole group (setFrictionThroughGroups).
     bool frictionThroughGroups() const;
 
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
@@ -54,6 +58,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// islands of a solve taken in turn (islandsInTurn; each island's result unchanged to the bit), or that scalar
     /// reference itself in Bullet's loop and order (off; what `raw`, plain Bullet, runs).
     void setSimdRows(bool on) { m_simdRows = on; }
+    /// Whether the SIMD row update is on (setSimdRows).
     bool simdRows() const { return m_simdRows; }
     /// The most islands one solve of Bullet's iterations took in turn in the last step (a row of each; Bullet
     /// solves small islands together), 0 when every solve kept Bullet's order (SIMD rows off, one island per solve,
@@ -64,21 +69,29 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// or a negative value for no bound; its friction impulses are scaled with it. Unset: no bound. RagdollWorld
     /// sets it from Method::selfContactCap.
     using ContactWarmStartCap = std::function<btScalar(const btPersistentManifold& manifold, btScalar dt)>;
+    /// Sets the cap (see ContactWarmStartCap); an empty function removes it.
     void setContactWarmStartCap(ContactWarmStartCap cap) { m_contactCap = std::move(cap); }
+    /// The cap in force; empty when unset.
     const ContactWarmStartCap& contactWarmStartCap() const { return m_contactCap; }
 
   protected:
-    void prepareSolve(int, int) override { m_mostIslandsInTurn = 0; } // once per step, before its solves
+    /// Bullet's once-per-step hook, before the step's solves: resets islandsInTurn.
+    void prepareSolve(int, int) override { m_mostIslandsInTurn = 0; }
+    /// Bounds each contact point's last impulse by the cap (its warm start), then Bullet's contact rows.
     void convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
                          const btContactSolverInfo& infoGlobal) override;
+    /// Bullet's joint rows, then each tracked constraint's rows warm-started from their last impulses.
     void convertJoints(btTypedConstraint** constraints, int numConstraints,
                        const btContactSolverInfo& infoGlobal) override;
+    /// Keeps each tracked constraint's row impulses for the next step, then Bullet's finish.
     btScalar solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                            const btContactSolverInfo& infoGlobal) override;
+    /// One iteration over every row: the direct joint solve's or Bullet's, in SIMD or Bullet's scalar rows.
     btScalar solveSingleIteration(int iteration, btCollisionObject** bodies, int numBodies,
                                   btPersistentManifold** manifoldPtr, int numManifolds, btTypedConstraint** constraints,
                                   int numConstraints, const btContactSolverInfo& infoGlobal,
                                   btIDebugDraw* debugDrawer) override;
+    /// The direct joint solve's iterations when it is on, else Bullet's loop (islands in turn with SIMD rows).
     btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
                                                btPersistentManifold** manifoldPtr, int numManifolds,
                                                btTypedConstraint** constraints, int numConstraints,

@@ -14,7 +14,7 @@ namespace afb::bullet {
 
 class Ragdoll;
 
-/// The engine's friction combination (af-format §4.8) through Bullet's one process-wide contact-added callback:
+/// The engine's friction combination (docs/format.md §4.8) through Bullet's one process-wide contact-added callback:
 /// ragdoll bodies spawned with SpawnOptions::engineContactFriction then combine friction as the engine does.
 ///
 /// The callback is written once per process, by the first install() (every RagdollWorld and every guard calls it),
@@ -42,26 +42,32 @@ class EngineContactFriction {
     bool m_active = false;
 };
 
-/// A caller's world with a Method's world-level knobs (substeps, iterations, split impulse, ERPs, warm starting,
-/// position iterations) and the engine's contact friction. Ragdolls spawned with `Ragdoll(asset, ragdollWorld,
-/// options)` get the position pass. Not copyable; one world, one thread.
 /// `method` as a world with (`ragdollSolver`) or without a RagdollSolver runs it (RagdollWorld::method).
 Method methodInForce(const Method& method, bool ragdollSolver);
 
+/// A caller's world with a Method's world-level knobs (substeps, iterations, split impulse, ERPs, warm starting,
+/// position iterations) and the engine's contact friction. Ragdolls spawned with `Ragdoll(asset, ragdollWorld,
+/// options)` get the position pass. Not copyable; one world, one thread.
 class RagdollWorld {
   public:
+    /// Installs `method`'s world-level knobs into `world` (applyWorldKnobs) and the engine's contact friction;
+    /// `world` must outlive this object and every ragdoll spawned through it.
     RagdollWorld(btDiscreteDynamicsWorld& world, const Method& method);
+    /// Takes the position pass and the solver's contact cap out of the world; its solver settings stay. Destroy
+    /// the ragdolls spawned through it first.
     ~RagdollWorld();
     RagdollWorld(const RagdollWorld&) = delete;
     RagdollWorld& operator=(const RagdollWorld&) = delete;
 
+    /// The caller's world this one manages.
     btDiscreteDynamicsWorld& world() { return m_world; }
+    /// The caller's world this one manages.
     const btDiscreteDynamicsWorld& world() const { return m_world; }
     /// The method whose world-level knobs are in force: the one given, except in a world whose constraint solver
     /// is not a RagdollSolver, where the direct joint solve cannot run: its world-level knobs then fall back to the
-    /// iterative default's (direct-joints off, position-tree 0, friction-directions 1). The tree position step
-    /// over Bullet's iterative joints pushed feet 24–53 mm into the ground and passed 106 of 136 stress runs,
-    /// the iterative default 131 (README: the presets). `methodInForce` gives the same without a world.
+    /// iterative default's (direct-joints off, position-tree 0, friction-directions 1), because the tree position
+    /// step over Bullet's iterative joints pushes limbs into the ground (docs/methods.md). `methodInForce` gives
+    /// the same without a world.
     const Method& method() const { return m_method; }
 
     /// Steps one frame of `dtSeconds` as the method's substeps (stepSimulation with a fixed substep), or more while
@@ -81,6 +87,7 @@ class RagdollWorld {
     /// (ray tests, contact tests) see the box, whose user pointer is the Ragdoll, not its bodies: a game that
     /// ray-tests resting ragdolls calls Ragdoll::surface() on a hit box first, or leaves sinking off.
     void setSinking(bool on) { m_sinking = on; }
+    /// Whether sinking is on (setSinking).
     bool sinking() const { return m_sinking; }
 
     /// The ragdoll spawned through this world that `object` belongs to (one of its bodies, or the box of a sunk
@@ -89,12 +96,14 @@ class RagdollWorld {
 
     /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
     void attach(Ragdoll& ragdoll);
+    /// Unregisters a ragdoll (its destructor); not for callers.
     void detach(Ragdoll& ragdoll);
     /// Forgets the ragdoll's warm-started joint impulses (its explosion guard restored it); not for callers.
     void restartWarmStarting(Ragdoll& ragdoll);
     /// Forget the ragdoll's Bullet bodies and constraints before it replaces them, and learn the new ones after
     /// (Ragdoll::setLod); it keeps its place. Not for callers.
     void detachBodies(Ragdoll& ragdoll);
+    /// Learns the ragdoll's new Bullet bodies and constraints (the second half of detachBodies); not for callers.
     void attachBodies(Ragdoll& ragdoll);
 
   private:
@@ -117,7 +126,7 @@ class RagdollWorld {
         btScalar boundingRadius;
     };
     /// The ragdoll bodies of the world by address: open addressing with linear probing, at most half taken. Asked
-    /// for every contact pair and manifold each step (a sorted table's binary search cost 3 % of a step).
+    /// for every contact pair and manifold each step, so a lookup is one or two probes.
     class OwnerTable {
       public:
         const BodyOwner* find(const btCollisionObject* body) const;
@@ -148,8 +157,8 @@ class RagdollWorld {
 
 /// A dynamics world and its solver, as makeWorld makes them (destroy the world first).
 struct WorldParts {
-    std::unique_ptr<btConstraintSolver> solver;
-    std::unique_ptr<btDiscreteDynamicsWorld> world;
+    std::unique_ptr<btConstraintSolver> solver;     ///< the world's constraint solver (a RagdollSolver or Bullet's)
+    std::unique_ptr<btDiscreteDynamicsWorld> world; ///< the dynamics world, using `solver`
 };
 
 /// The world a method's backend needs, on the caller's collision parts: for Backend::Multibody a

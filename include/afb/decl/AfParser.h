@@ -1,5 +1,5 @@
 #pragma once
-// Reading and writing `.af` files (af-format §1).
+// Reading and writing `.af` files (docs/format.md §1).
 #include <filesystem>
 #include <optional>
 #include <string>

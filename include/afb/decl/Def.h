@@ -1,5 +1,5 @@
 #pragma once
-// `.def` files (af-format §7.1, §7.2): `entityDef` key/value decls and `model` decls, as the file says them.
+// `.def` files (docs/format.md §7.1, §7.2): `entityDef` key/value decls and `model` decls, as the file says them.
 // Inheritance is not applied here; `decl::Library` resolves it.
 #include <filesystem>
 #include <optional>
@@ -22,6 +22,7 @@ struct EntityDef {
     /// Every key/value pair in file order, duplicates included; `inherit` keys are kept (the Library merges
     /// them).
     std::vector<std::pair<std::string, std::string>> keyValues;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const EntityDef&) const = default;
 
     /// Value of `key` (ASCII case-insensitive, as idDict); of several, the last one written wins.
@@ -39,6 +40,7 @@ struct ModelChannel {
     std::string joints;
     /// Where the `channel` keyword is.
     SourceLocation location;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const ModelChannel&) const = default;
 };
 
@@ -52,6 +54,7 @@ struct ModelAnim {
     std::optional<std::string> block;
     /// Where the `anim` keyword is.
     SourceLocation location;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const ModelAnim&) const = default;
 
     /// The engine's alias: the name without its digit suffix (`pain2` → `pain`).
@@ -78,6 +81,7 @@ struct ModelDef {
     std::vector<ModelAnim> anims;
     /// `remove <anim>` statements in file order (each deletes inherited anims by name or alias).
     std::vector<std::string> removes;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const ModelDef&) const = default;
 
     /// The anim named exactly `name` (case-sensitive), or nullptr.
@@ -90,6 +94,7 @@ struct DefFile {
     std::vector<EntityDef> entityDefs;
     /// `model` decls in file order.
     std::vector<ModelDef> models;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const DefFile&) const = default;
 };
 

@@ -1,6 +1,6 @@
 #pragma once
 // An indexed content folder (Doom's `base/`: `af/`, `def/`, `models/`) and the resolution of an entity to
-// what a ragdoll needs: merged keys, model decl, mesh, af_pose anim and articulated figure (af-format §7).
+// what a ragdoll needs: merged keys, model decl, mesh, af_pose anim and articulated figure (docs/format.md §7).
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -24,6 +24,7 @@ struct ResolvedModel {
     ModelDef model;
     /// The decl and its ancestors, child first.
     std::vector<std::string> chain;
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const ResolvedModel&) const = default;
 };
 
@@ -63,6 +64,7 @@ struct ResolvedEntity {
     /// Absolute path of the `.af` file holding it.
     std::filesystem::path figureFile;
 
+    /// Equal when they say the same thing; source locations never count.
     bool operator==(const ResolvedEntity&) const = default;
 
     /// Merged value of `key` (case-insensitive), or nullopt.

@@ -1,9 +1,9 @@
 #pragma once
-// Value types and parser for `.md5anim` files (af-format §7.4): what the file says, nothing more.
+// Value types and parser for `.md5anim` files (docs/format.md §7.4): what the file says, nothing more.
 //
 // In particular the root translation is kept as written. The engine's anim loader subtracts the baseframe
 // root translation from the animated root components and then zeroes the baseframe root translation
-// (af-format §7.4, §8 item 19); that meaning belongs to the layer that builds poses from an anim, not to this
+// (docs/format.md §7.4, §8 item 19); that meaning belongs to the layer that builds poses from an anim, not to this
 // value type.
 #include <cstdint>
 #include <filesystem>
@@ -32,10 +32,12 @@ enum Md5ComponentBit : int {
 
 /// One line of the `hierarchy { }` block.
 struct Md5HierarchyEntry {
-    std::string name;   ///< joint name as written; must equal the mesh's joint name case-sensitively (§7.4)
+    /// Joint name as written; must equal the mesh's joint name case-sensitively (docs/format.md §7.4).
+    std::string name;
     int parent = -1;    ///< parent index, lower than this joint's index; -1 only for joint 0
     int flags = 0;      ///< Md5ComponentBit set: components animated by the frames (0..63)
     int startIndex = 0; ///< index in each frame of the joint's first animated component
+    /// Equal when every field is.
     bool operator==(const Md5HierarchyEntry&) const = default;
 };
 
@@ -43,13 +45,16 @@ struct Md5HierarchyEntry {
 struct Md5Bounds {
     Vec3 min; ///< minimum corner, model space, Doom units
     Vec3 max; ///< maximum corner, model space, Doom units
+    /// Equal when every field is.
     bool operator==(const Md5Bounds&) const = default;
 };
 
 /// One line of the `baseframe { }` block: a joint's values for the components its flags do not animate.
 struct Md5BaseJoint {
     Vec3 position;    ///< translation relative to the parent joint (root: model-relative), Doom units, as written
-    Vec3 orientation; ///< parent-relative orientation qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|), §7.3)
+    Vec3 orientation; ///< parent-relative orientation qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|); docs/format.md
+                      ///< §7.3)
+    /// Equal when every field is.
     bool operator==(const Md5BaseJoint&) const = default;
 };
 
@@ -63,6 +68,7 @@ struct Md5Anim {
     std::vector<Md5Bounds> bounds;            ///< one box per frame
     std::vector<Md5BaseJoint> baseframe;      ///< one entry per joint; root translation NOT zeroed (see above)
     std::vector<std::vector<double>> frames;  ///< `frame k` values, each numAnimatedComponents long, k = index
+    /// Equal when every field is.
     bool operator==(const Md5Anim&) const = default;
 };
 
@@ -70,11 +76,11 @@ struct Md5Anim {
 int animatedComponentCount(int flags);
 
 /// The first way `anim`'s hierarchy differs from `mesh`'s joints (joint count, names compared
-/// case-sensitively, parent indices), as the engine's CheckModelHierarchy checks them (af-format §7.4);
+/// case-sensitively, parent indices), as the engine's CheckModelHierarchy checks them (docs/format.md §7.4);
 /// nullopt when they match.
 std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh);
 
-/// Parses `.md5anim` text. Every count, index and reference is checked (af-format §7.4); on any error:
+/// Parses `.md5anim` text. Every count, index and reference is checked (docs/format.md §7.4); on any error:
 /// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
 /// locations only.
 std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics);

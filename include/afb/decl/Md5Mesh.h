@@ -1,7 +1,7 @@
 #pragma once
-// Value types and parser for `.md5mesh` files (af-format §7.3): what the file says, nothing more. Joint
+// Value types and parser for `.md5mesh` files (docs/format.md §7.3): what the file says, nothing more. Joint
 // transforms stay in the file's Doom conventions (model-space bind pose, quaternion w left implicit); the
-// figure layer converts them (af-format §0, §8 item 21).
+// figure layer converts them (docs/format.md §0, §8 item 21).
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -20,21 +20,25 @@ struct Md5Joint {
     int parent = -1;  ///< index of the parent joint, always lower than this joint's index; -1 for a root
     Vec3 position;    ///< bind position in model space (absolute, not parent-relative), Doom units
     Vec3 orientation; ///< bind orientation in model space: qx, qy, qz as written (w = +sqrt(|1-x²-y²-z²|),
-                      ///< §7.3)
+                      ///< docs/format.md §7.3)
+    /// Equal when every field is.
     bool operator==(const Md5Joint&) const = default;
 };
 
 /// One `vert` line: texture coordinates and the vertex's range in its mesh's weight list.
 struct Md5Vert {
-    double s = 0, t = 0; ///< texture coordinates as written
+    double s = 0;        ///< texture coordinate s (horizontal) as written
+    double t = 0;        ///< texture coordinate t (vertical) as written
     int firstWeight = 0; ///< index of the vertex's first weight in Md5SubMesh::weights
     int weightCount = 1; ///< number of consecutive weights, at least 1 (firstWeight + weightCount <= weights.size())
+    /// Equal when every field is.
     bool operator==(const Md5Vert&) const = default;
 };
 
 /// One `tri` line: a triangle of the mesh.
 struct Md5Tri {
     int v[3] = {0, 0, 0}; ///< indices into Md5SubMesh::verts, in the file's winding order
+    /// Equal when every field is.
     bool operator==(const Md5Tri&) const = default;
 };
 
@@ -43,6 +47,7 @@ struct Md5Weight {
     int joint = 0;   ///< index into Md5Mesh::joints
     double bias = 0; ///< blend factor as written (the engine does not renormalise biases)
     Vec3 offset;     ///< position in the joint's bind frame (joint-local), Doom units
+    /// Equal when every field is.
     bool operator==(const Md5Weight&) const = default;
 };
 
@@ -53,6 +58,7 @@ struct Md5SubMesh {
     std::vector<Md5Vert> verts;     ///< `vert` lines, in index order
     std::vector<Md5Tri> tris;       ///< `tri` lines, in index order
     std::vector<Md5Weight> weights; ///< `weight` lines, in index order
+    /// Equal when every field is.
     bool operator==(const Md5SubMesh&) const = default;
 };
 
@@ -62,11 +68,12 @@ struct Md5Mesh {
     std::string commandline;        ///< `commandline` string as written (exporter notes)
     std::vector<Md5Joint> joints;   ///< `joints` block, in file order; parents precede children
     std::vector<Md5SubMesh> meshes; ///< `mesh` blocks, in file order
+    /// Equal when every field is.
     bool operator==(const Md5Mesh&) const = default;
 };
 
 /// Index of the first joint named `name`, compared ignoring ASCII case as the engine's GetJointHandle does
-/// (af-format §7.3, §8 item 22: a duplicate name is shadowed by the earlier joint); nullopt when absent.
+/// (docs/format.md §7.3, §8 item 22: a duplicate name is shadowed by the earlier joint); nullopt when absent.
 std::optional<int> findJoint(const Md5Mesh& mesh, std::string_view name);
 
 /// Number of vertices over all sub-meshes.
@@ -76,7 +83,7 @@ std::size_t totalTriCount(const Md5Mesh& mesh);
 /// Number of weights over all sub-meshes.
 std::size_t totalWeightCount(const Md5Mesh& mesh);
 
-/// Parses `.md5mesh` text. Every count, index and reference is checked (af-format §7.3); on any error:
+/// Parses `.md5mesh` text. Every count, index and reference is checked (docs/format.md §7.3); on any error:
 /// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in
 /// locations only.
 std::optional<Md5Mesh> parseMd5Mesh(std::string_view text, const std::string& fileName, text::Diagnostics& diagnostics);

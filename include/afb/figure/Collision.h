@@ -1,5 +1,5 @@
 #pragma once
-// Which bodies of a figure collide (af-format §6.2), and how far apart two bodies are at the load pose.
+// Which bodies of a figure collide (docs/format.md §6.2), and how far apart two bodies are at the load pose.
 #include <utility>
 #include <vector>
 
@@ -10,13 +10,13 @@ namespace afb::figure {
 /// Gaps below this (metres) count as touching when a figure is checked at its load pose.
 inline constexpr double kTouchToleranceM = 0.001;
 
-/// Pairs (i < j) of bodies that collide with each other (§6.2): the figure's selfCollision is on, both bodies'
-/// selfCollision flags are on, no non-spring constraint joins them directly, and each clipMask includes the
+/// Pairs (i < j) of bodies that collide with each other (docs/format.md §6.2): the figure's selfCollision is on, both
+/// bodies' selfCollision flags are on, no non-spring constraint joins them directly, and each clipMask includes the
 /// other's contents. Ascending order.
 std::vector<std::pair<int, int>> selfCollisionPairs(const Figure& figure);
 
 /// True when a collision-disabling constraint attaches the body to the world: the engine then lets it pass
-/// through all static world geometry (§4.1, §6.2, §8 item 7).
+/// through all static world geometry (docs/format.md §4.1, §6.2, §8 item 7).
 bool attachedToWorld(const Figure& figure, int body);
 
 /// Signed separation of two bodies' polytopes at the load pose, metres, along the best separating axis of the

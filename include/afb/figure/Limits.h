@@ -1,6 +1,6 @@
 #pragma once
 // How far a constraint's limit is exceeded, engine-neutral: the one definition the figure's load-pose lint
-// and the drop metrics share (af-format §4.3 cone and pyramid, §4.5 hinge). A pose is given as the rotations
+// and the drop metrics share (docs/format.md §4.3 cone and pyramid, §4.5 hinge). A pose is given as the rotations
 // of the two bodies' frames (centre of mass, principal axes) to world; for a world constraint (body2 = −1)
 // the "body2 rotation" is the model → world rotation, since the figure keeps body2's data in model space
 // then.
@@ -15,12 +15,12 @@ double coneAngleRad(const ConeLimit& cone, const Eigen::Matrix3d& body1Rotation,
 
 /// The pyramid's two planar angles of the shaft (body1) in its basis f, l, u = f×l (body2), radians in
 /// (−π, π]: x = atan2(s·l, s·f), the angle in span(f, l), limited by halfAngle1Rad; y = atan2(s·u, s·f), the
-/// angle in span(f, u), limited by halfAngle2Rad (§4.3; exact, not small-angle).
+/// angle in span(f, u), limited by halfAngle2Rad (docs/format.md §4.3; exact, not small-angle).
 Eigen::Vector2d pyramidPlanarAnglesRad(const PyramidLimit& pyramid, const Eigen::Matrix3d& body1Rotation,
                                        const Eigen::Matrix3d& body2Rotation);
 
-/// φ of a hinge (§4.5): the right-handed rotation of constraint c's frame in body1 relative to its frame in
-/// body2 about their Z axis (the hinge axis), 0 at the load pose, radians in (−π, π].
+/// φ of a hinge (docs/format.md §4.5): the right-handed rotation of constraint c's frame in body1 relative to its frame
+/// in body2 about their Z axis (the hinge axis), 0 at the load pose, radians in (−π, π].
 double hingeAngleRad(const FigureConstraint& c, const Eigen::Matrix3d& body1Rotation,
                      const Eigen::Matrix3d& body2Rotation);
 

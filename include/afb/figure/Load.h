@@ -13,7 +13,7 @@ namespace afb::figure {
 
 /// A built figure with the inputs it came from (the mesh is kept for skinning).
 struct LoadedFigure {
-    Figure figure;
+    Figure figure;                ///< the built figure, SI units
     decl::Md5Mesh mesh;           ///< the md5mesh the skeleton came from
     decl::AfDecl decl;            ///< the articulatedFigure decl as parsed
     std::filesystem::path afFile; ///< where the decl came from

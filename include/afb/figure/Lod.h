@@ -1,5 +1,5 @@
 #pragma once
-// Levels of detail of a figure (issue 12): its bodies partitioned into groups, each group simulated as one rigid
+// Levels of detail of a figure: its bodies partitioned into groups, each group simulated as one rigid
 // body (bullet::Ragdoll::setLod). Engine-neutral: which bodies go together, from a caller's list or by mass.
 #include <string>
 #include <variant>
@@ -12,7 +12,8 @@ namespace afb::figure {
 /// A level of detail: every body of the figure in exactly one group. Each group is ascending, the groups are
 /// ordered by their first body, and bodies joined by a `fixed` constraint share a group at every level.
 struct LodLevel {
-    std::vector<std::vector<int>> groups;
+    std::vector<std::vector<int>> groups; ///< body indices (into Figure::bodies) per group
+    /// Equal when the groups are.
     friend bool operator==(const LodLevel&, const LodLevel&) = default;
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// Exact mass properties of a polytope of uniform density (af-format §3.2), and the engine's clip-model rule
+// Exact mass properties of a polytope of uniform density (docs/format.md §3.2), and the engine's clip-model rule
 // for zero-volume shapes. Units follow the inputs: lengths in the polytope's unit L, density in mass per L³.
 #include <span>
 
@@ -26,22 +26,22 @@ struct MassProperties {
     bool zeroVolumeFallback = false;
 };
 
-/// Exact integration over the polyhedron (signed tetrahedra, af-format §3.2), shifted to the centre of mass
+/// Exact integration over the polyhedron (signed tetrahedra, docs/format.md §3.2), shifted to the centre of mass
 /// with the parallel-axis theorem. No engine fallbacks: a zero volume gives mass 0, inertia 0 and the vertex
 /// mean as centre of mass; a negative volume gives negative mass and inertia.
 MassProperties computeMassProperties(const Polytope& polytope, double density);
 
-/// What the engine's idClipModel cache returns (af-format §3.2, §8 item 14): computeMassProperties, except
+/// What the engine's idClipModel cache returns (docs/format.md §3.2, §8 item 14): computeMassProperties, except
 /// that a volume of exactly 0 (e.g. a 2-sided cone) gives mass = density, centre of mass 0 and inertia
 /// density × identity (the trace model's volume-1/identity fallback, scaled by density by the cache), with
 /// zeroVolumeFallback set. Negative or otherwise invalid masses are left to the body's SetDensity rule
-/// (§3.3).
+/// (docs/format.md §3.3).
 MassProperties computeClipModelMassProperties(const Polytope& polytope, double density);
 
 /// One rigid body as a part of a rigid union: its mass, its principal moments and its body frame (centre of mass,
 /// principal axes) in a frame common to every part.
 struct RigidPart {
-    double massKg = 0;
+    double massKg = 0;                                     ///< the part's mass, kg
     Eigen::Vector3d inertiaKgM2 = Eigen::Vector3d::Zero(); ///< principal moments about the body frame's axes
     Transform pose;                                        ///< body frame in the common frame
 };

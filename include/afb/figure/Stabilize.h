@@ -1,5 +1,5 @@
 #pragma once
-// Mass and inertia stabilisation (opt-in, issue 11): the approach of Jolt's Ragdoll::Stabilize, written here. A
+// Mass and inertia stabilisation (opt-in): the approach of Jolt's Ragdoll::Stabilize, written here. A
 // sequential-impulse solver converges slowly where a light body sits between heavy ones or a body's principal
 // moments are far apart (a thin rod spins up about its long axis); evening out those ratios trades a little
 // physical truth (which body carries how much of the figure's mass) for a solver that converges.
@@ -20,7 +20,8 @@ struct StabilizeOptions {
 
 /// What stabilisation changed, one line per body ("l1: mass 1000 -> 190 kg, moments scaled 0.19").
 struct StabilizeReport {
-    std::vector<std::string> changes;
+    std::vector<std::string> changes; ///< one line per changed body, in body order
+    /// True when stabilisation changed any body.
     bool changed() const { return !changes.empty(); }
 };
 

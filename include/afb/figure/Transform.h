@@ -1,6 +1,6 @@
 #pragma once
 // Rigid transforms in standard column-vector convention (Bullet's): world = rotation * local + position.
-// Doom's row-matrix "axis" is converted to this once, where a file's values enter the figure layer (af-format §0).
+// Doom's row-matrix "axis" is converted to this once, where a file's values enter the figure layer (docs/format.md §0).
 #include <Eigen/Geometry>
 
 namespace afb::figure {
@@ -21,7 +21,7 @@ struct Transform {
 };
 
 /// Standard rotation from md5 quaternion components as written (x, y, z; w = +sqrt(|1 − x² − y² − z²|)).
-/// The engine uses R(q) as a row "axis", so the rotation applied to vectors is R(q)ᵀ = R(conj q) (af-format §0,
+/// The engine uses R(q) as a row "axis", so the rotation applied to vectors is R(q)ᵀ = R(conj q) (docs/format.md §0,
 /// §7.3, §8 item 21).
 inline Eigen::Matrix3d rotationFromMd5(double x, double y, double z) {
     const double w = std::sqrt(std::abs(1.0 - x * x - y * y - z * z));

@@ -1,16 +1,30 @@
 #pragma once
 // The figure layer's own words for what a body is shaped like, how two bodies are joined and which contents
 // bits they carry. The layers below (bullet, sim, the tools) speak these, never the decl's: the figure
-// builder maps the decl's keywords onto them once (ARCHITECTURE.md "one conversion point").
+// builder maps the decl's keywords onto them once, the one place where decl words become figure words.
 #include <cstdint>
 
 namespace afb::figure {
 
-/// A body's trace-model shape (af-format §3.1).
-enum class ShapeType : std::uint8_t { Box, Octahedron, Dodecahedron, Cylinder, Cone, Bone };
+/// A body's trace-model shape (docs/format.md §3.1).
+enum class ShapeType : std::uint8_t {
+    Box,          ///< a box between two corners
+    Octahedron,   ///< the octahedron inscribed in a box's bounds
+    Dodecahedron, ///< the dodecahedron inscribed in a box's bounds
+    Cylinder,     ///< a prism of n sides inscribed in a box's bounds, axis along Z
+    Cone,         ///< a pyramid of n sides inscribed in a box's bounds, pointing along +Z
+    Bone,         ///< a double pyramid on a triangle between two points, with a width
+};
 
-/// What a constraint does (af-format §4.2–§4.7).
-enum class JointType : std::uint8_t { Fixed, BallAndSocket, Universal, Hinge, Slider, Spring };
+/// What a constraint does (docs/format.md §4.2–§4.7).
+enum class JointType : std::uint8_t {
+    Fixed,         ///< no relative motion
+    BallAndSocket, ///< shared anchor; free rotation within an optional cone or pyramid limit
+    Universal,     ///< shared anchor; the two shafts may bend but not twist about each other
+    Hinge,         ///< shared anchor; rotation about one axis within an optional range
+    Slider,        ///< translation along one axis, no rotation
+    Spring,        ///< a quadratic force between two anchors, no kinematic constraint
+};
 
 /// The shape's `.af` keyword: "box", "octahedron", "dodecahedron", "cylinder", "cone" or "bone".
 const char* toString(ShapeType type);
@@ -19,13 +33,18 @@ const char* toString(ShapeType type);
 /// or "spring".
 const char* toString(JointType type);
 
-/// Contents bits of a body (neo/renderer/Material.h; af-format §1.6), as FigureBody::contents and clipMask
-/// hold them.
+/// Contents bit `solid` (neo/renderer/Material.h; docs/format.md §1.6), as FigureBody::contents and clipMask hold
+/// the bits: world geometry and anything that blocks everything.
 inline constexpr std::uint32_t kContentsSolid = 1u << 0;
+/// Contents bit `playerclip`: blocks players.
 inline constexpr std::uint32_t kContentsPlayerClip = 1u << 3;
+/// Contents bit `monsterclip`: blocks monsters.
 inline constexpr std::uint32_t kContentsMonsterClip = 1u << 4;
-inline constexpr std::uint32_t kContentsMoveableClip = 1u << 5; ///< always OR-ed into a body's clipMask
+/// Contents bit of moveable objects; always OR-ed into a body's clipMask, not nameable in a file.
+inline constexpr std::uint32_t kContentsMoveableClip = 1u << 5;
+/// Contents bit `body`: a living actor's body.
 inline constexpr std::uint32_t kContentsBody = 1u << 8;
+/// Contents bit `corpse`: a dead body (a ragdoll body's default contents).
 inline constexpr std::uint32_t kContentsCorpse = 1u << 10;
 
 } // namespace afb::figure

@@ -1,5 +1,5 @@
 #pragma once
-// afb gen (issue 14): a ragdoll figure from a rigged mesh. Bodies are fitted to the vertices weighted to each bone
+// afb gen: a ragdoll figure from a rigged mesh. Bodies are fitted to the vertices weighted to each bone
 // or group of bones, joints come from a humanoid template matched by bone names, and the result is a complete
 // content folder (af/N.af, def/N.def, models/md5/N/N.md5mesh + af_pose.md5anim) that decl::Library, afb inspect
 // and afb drop read as they read Doom's own.
@@ -28,7 +28,7 @@ struct JointTemplate {
     double minDeg = 0;         ///< hinge: least bend from the bind pose, degrees (negative: past straight)
     double maxDeg = 120;       ///< hinge: most bend from the bind pose, degrees
     std::string bend = "back"; ///< hinge: the child swings "back" or "forward" when it bends
-    double friction = 0.4;     ///< joint friction (af-format §4.8)
+    double friction = 0.4;     ///< joint friction (docs/format.md §4.8)
 };
 
 /// Every choice afb gen makes, overridable by a JSON rules file (see loadRules).

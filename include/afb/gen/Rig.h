@@ -1,5 +1,5 @@
 #pragma once
-// A rigged, skinned model independent of its source format (afb gen, issue 14): a joint hierarchy with its bind
+// A rigged, skinned model independent of its source format (afb gen): a joint hierarchy with its bind
 // pose and surfaces whose vertices are weighted to joints. Loaded from an `.md5mesh` through our own reader or from
 // any format assimp reads; written back as `.md5mesh` + a one-frame `af_pose.md5anim` with the decl writers.
 // Everything here is in Doom units (1 unit = 0.0254 m by default), model space, Z up, X forward, standard column
@@ -90,10 +90,11 @@ std::optional<Rig> importRigFromMemory(const void* data, std::size_t size, const
 /// with offsets from the bind pose (so skinning the written file in the bind pose gives the vertex back).
 decl::Md5Mesh toMd5Mesh(const Rig& rig, const std::string& commandline);
 
-/// The one-frame `af_pose` of `rig`'s bind pose: nothing animated, the baseframe parent-relative (af-format §7.4).
+/// The one-frame `af_pose` of `rig`'s bind pose: nothing animated, the baseframe parent-relative (docs/format.md §7.4).
 decl::Md5Anim bindPoseAnim(const Rig& rig, const std::string& commandline);
 
-/// The md5 quaternion components (x, y, z) of a standard rotation: the conjugate, w made non-negative (§7.3).
+/// The md5 quaternion components (x, y, z) of a standard rotation: the conjugate, w made non-negative (docs/format.md
+/// §7.3).
 Eigen::Vector3d md5Orientation(const Eigen::Matrix3d& rotation);
 
 /// The model's size: the largest extent of its vertices' bounding box (of its joints' when it has no vertex),

@@ -1,5 +1,5 @@
 #pragma once
-// Physics → pose (af-format §5.1): the full md5 skeleton from the bodies' world transforms, following the `mod`
+// Physics → pose (docs/format.md §5.1): the full md5 skeleton from the bodies' world transforms, following the `mod`
 // rules, and CPU skinning of the md5mesh from it.
 #include <span>
 #include <vector>
@@ -7,13 +7,15 @@
 #include "afb/decl/Md5Mesh.h"
 #include "afb/figure/Figure.h"
 
+/// The pose layer: md5 joint transforms from a ragdoll's bodies, for skinning the rendered model.
 namespace afb::pose {
 
+/// The figure layer's rigid transform; every pose here is in metres.
 using figure::Transform;
 
 /// A driven skeleton, metres.
 struct SkeletonPose {
-    Transform entity;             ///< model space to world: follows body 0 rigidly (§5.1 step 1)
+    Transform entity;             ///< model space to world: follows body 0 rigidly (docs/format.md §5.1 step 1)
     std::vector<Transform> model; ///< every md5 joint in model space
     std::vector<Transform> local; ///< every md5 joint relative to its parent (the root: model space)
 
@@ -21,14 +23,14 @@ struct SkeletonPose {
     std::vector<Transform> world() const;
 };
 
-/// The skeleton for body world transforms `bodies` (one per figure body, body frames, metres). Joints with a body
-/// take their orientation (`orientation`), position (`position`) or both (`both`) from it, the later body winning
-/// when two drive one joint; every other component follows the parent with the af_pose local transform. Joint 0
-/// never moves in model space. The joint target uses the correct formula for a rotated entity (§5.1 note).
+/// The skeleton for body world transforms `bodies` (one per figure body, body frames, metres). Joints with a body take
+/// their orientation (`orientation`), position (`position`) or both (`both`) from it, the later body winning when two
+/// drive one joint; every other component follows the parent with the af_pose local transform. Joint 0 never moves in
+/// model space. The joint target uses the correct formula for a rotated entity (docs/format.md §5.1 note).
 SkeletonPose driveSkeleton(const figure::Figure& figure, std::span<const Transform> bodies);
 
 /// Skinned vertex positions per sub-mesh (metres, model space): Σ bias·(joint ∘ offset) over each vertex's
-/// weights (§7.3), for the given model-space joint transforms (metres).
+/// weights (docs/format.md §7.3), for the given model-space joint transforms (metres).
 std::vector<std::vector<Eigen::Vector3d>> skin(const decl::Md5Mesh& mesh, std::span<const Transform> jointsModel,
                                                double metresPerUnit);
 

@@ -1,6 +1,6 @@
 #pragma once
 // Drop tests: figures dropped onto a ground plane, measured for speed, accuracy and stability while they fall.
-// Shared by `afb drop`, `afb golden`, tests and benchmarks (ARCHITECTURE.md: src/sim).
+// Shared by `afb drop`, `afb golden`, tests and benchmarks (the tools library, src/sim).
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -68,7 +68,7 @@ struct DropResult {
     bool exploded = false;
     std::optional<double> explodedAtS;
     /// A body's pose or velocity was NaN or infinite after some step: the runtime failed, whatever the figure
-    /// (issue 17: a figure that builds must simulate to finite state). Implies `exploded`.
+    /// (a figure that builds must simulate to finite state). Implies `exploded`.
     bool nonFinite = false;
     std::optional<double> settleTimeS;
     double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz

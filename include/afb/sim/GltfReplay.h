@@ -10,18 +10,18 @@
 //   bodies    one node per body (centre of mass, principal axes) with its exact collision polytope as a mesh: a
 //             separate tree, so a viewer can hide the hulls and keep the skinned mesh, or the reverse.
 // and one animation, "drop": frame k of the recording at t = k · frameSeconds (frame 0: the spawn, before the first
-// step), a translation and a rotation key per frame for every joint node (parent-relative; the md5 root joints
-// relative to the root node, i.e. in the world) and every body node (world), linear interpolation. So a drop of N
-// steps has N + 1 keys per channel and lasts N · frameSeconds.
+// step), a translation and a rotation key per frame for every joint node (parent-relative; the md5 root joints relative
+// to the root node, i.e. in the world) and every body node (world), linear interpolation. So a drop of N steps has N +
+// 1 keys per channel and lasts N · frameSeconds.
 //
-// Units: metres. Axes: Doom and the drop are Z-up (X forward, Y left); glTF is Y-up with +Z forward and +X left.
-// Every point p becomes P·p and every rotation R becomes P·R·Pᵀ with the proper rotation
+// Units: metres. Axes: Doom and the drop are Z-up (X forward, Y left); glTF is Y-up with +Z forward and +X left. Every
+// point p becomes P·p and every rotation R becomes P·R·Pᵀ with the proper rotation
 //     P: (x, y, z)_Doom ↦ (y, z, x)_glTF,
 // so Doom's up (+Z) is glTF's up (+Y), Doom's forward (+X) is glTF's forward (+Z) and Doom's left (+Y) is glTF's +X.
 //
 // Skinning: glTF blends at most four joint transforms about one bind-pose vertex (linear blend skinning); md5 gives
-// every weight its own offset (af-format §7.3). The bind vertex is the md5 vertex in the md5mesh bind pose, and each
-// vertex keeps its four largest joint weights (weights on one joint summed), renormalised. That is exact for every
+// every weight its own offset (docs/format.md §7.3). The bind vertex is the md5 vertex in the md5mesh bind pose, and
+// each vertex keeps its four largest joint weights (weights on one joint summed), renormalised. That is exact for every
 // vertex with at most four weights whose offsets are one bind-pose point seen from each joint (as exporters write
 // them), and an approximation otherwise. The joint nodes themselves are exact (driveSkeleton).
 #include <filesystem>

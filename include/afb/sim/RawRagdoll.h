@@ -1,8 +1,8 @@
 #pragma once
-// Plain Bullet's version of a figure, the reference every chart shows (`afb chart`, README "Methods"): the same
+// Plain Bullet's version of a figure, the reference every chart shows (`afb chart`, docs/methods.md): the same
 // bodies as bullet::Ragdoll, joined by Bullet's own constraints as a plain Bullet user would join them, with none
 // of afbullet's policies. Built from the same figure::Figure and RagdollAsset; measured through the same probes
-// (bullet/Probes.h), so a drop reports it exactly as it reports the adapter. Tools library only: the economy
+// (detail/Probes.h), so a drop reports it exactly as it reports the adapter. Tools library only: the economy
 // benchmark and the stress matrix use it too.
 #include <memory>
 #include <optional>
@@ -15,9 +15,9 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
-#include "afb/bullet/Probes.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
+#include "afb/detail/Probes.h"
 
 namespace afb::sim {
 
@@ -45,7 +45,7 @@ std::optional<bullet::Method> methodByName(std::string_view name);
 ///  - bodies: one btRigidBody per figure body with the asset's shapes and the figure's mass, principal inertia,
 ///    body frame, contact friction, restitution and damping, and the same collision filtering (groups, masks,
 ///    the figure's self-collision pairs; jointed bodies never collide) — identical to bullet::Ragdoll's;
-///  - constraints (af-format §4 as a plain Bullet user maps it): fixed → btFixedConstraint; ball-and-socket →
+///  - constraints (docs/format.md §4 as a plain Bullet user maps it): fixed → btFixedConstraint; ball-and-socket →
 ///    btPoint2PointConstraint, or with a limit btConeTwistConstraint with free twist (a cone: both swing spans
 ///    the half angle; a pyramid: an elliptical cone with the two half angles as spans, its corners cut);
 ///    universal → btConeTwistConstraint with twist locked, its swing cone the limit's (frame B's X is the cone
@@ -53,11 +53,11 @@ std::optional<bullet::Method> methodByName(std::string_view name);
 ///    shafts) or free (±π) without a limit; hinge → btHingeConstraint with its range as btHinge's own limit;
 ///    slider → btSliderConstraint; spring → nothing (Bullet has no spring between two anchors);
 ///  - policies: the method's jointIterations as Bullet's per-constraint override (raw: none), its limitErp as the
-///    limits' bias factor (raw: Bullet's 0.3), its CCD policy (raw: off); no joint friction (§4.8), Bullet's
-///    product rule for contact friction, and Bullet's own deactivation (default thresholds) instead of the
+///    limits' bias factor (raw: Bullet's 0.3), its CCD policy (raw: off); no joint friction (docs/format.md §4.8),
+///    Bullet's product rule for contact friction, and Bullet's own deactivation (default thresholds) instead of the
 ///    figure's rest rules. Nothing runs on its bodies but Bullet.
-/// atRest() is the figure's own rest rules (§6.1) applied as a measurement only, so that settle times compare.
-/// Not copyable; one world, one thread.
+/// atRest() is the figure's own rest rules (docs/format.md §6.1) applied as a measurement only, so that settle times
+/// compare. Not copyable; one world, one thread.
 class RawRagdoll {
   public:
     /// Spawns into `world` (a plain world, or a sim::Scene's): `options.entityTransform`, collision group and
@@ -102,8 +102,8 @@ class RawRagdoll {
                           bullet::ImpulseRule rule = bullet::ImpulseRule::EngineThreshold);
     /// Bodies Bullet is simulating now (not deactivated).
     int awakeBodyCount() const;
-    /// True once the figure's rest rules (§6.1) have said the figure is at rest (latched: plain Bullet does not
-    /// act on it). Always false when spawned with comeToRest off.
+    /// True once the figure's rest rules (docs/format.md §6.1) have said the figure is at rest (latched: plain Bullet
+    /// does not act on it). Always false when spawned with comeToRest off.
     bool atRest() const;
 
   private:

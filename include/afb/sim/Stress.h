@@ -1,5 +1,5 @@
 #pragma once
-// Where methods fail (`afb stress`, issue 11): scenarios built in code that break ragdolls in known ways (mass and
+// Where methods fail (`afb stress`): scenarios built in code that break ragdolls in known ways (mass and
 // inertia ratios, long chains, fast impacts, big steps, bad spawns, piles), run with every method, each run judged
 // against documented failure thresholds; the first failure's time and cause are kept.
 #include <cstddef>
@@ -38,7 +38,7 @@ enum class StressCause {
 /// "nan", "speed", "anchor", "limit", "penetration", "jitter", "energy", "no-rest", "skipped" (or "pass").
 std::string_view toString(StressCause cause);
 
-/// The documented failure thresholds (issue 11). Lengths in metres, angles in degrees, times in seconds.
+/// The documented failure thresholds (docs/stability.md). Lengths in metres, angles in degrees, times in seconds.
 struct StressThresholds {
     double maxSpeedMps = 100.0;         ///< no body faster than this
     double maxAnchorErrorM = 0.1;       ///< no constraint's two anchors further apart
@@ -48,8 +48,8 @@ struct StressThresholds {
     double maxResidualSpinRadps = 1.0;  ///< a run that never rests: no body turning faster in its last second
     double maxEnergyGainJ = 1.0;        ///< kinetic + potential energy never above its start (+ external work)
     double restWithinS = 30.0;          ///< every scenario must come to rest within this (the run's length)
-    /// At rest: over restWindowS, no body moved more than restMoveM nor turned more than restTurnDeg (the
-    /// engine's no-move test, §6.1, with tight bounds: a position pass can hold a body still while the velocity
+    /// At rest: over restWindowS, no body moved more than restMoveM nor turned more than restTurnDeg (the engine's
+    /// no-move test (docs/format.md §6.1) with tight bounds: a position pass can hold a body still while the velocity
     /// solve leaves it a residual speed, and what a game sees is the motion).
     double restMoveM = 0.01, restTurnDeg = 2.0, restWindowS = 1.0;
 };

@@ -1,8 +1,8 @@
 #pragma once
-// What every ragdoll representation measures the same way: body states, how far a figure constraint is from
-// holding, and whether the figure is at rest by its own rules (af-format §6.1). bullet::Ragdoll uses them, and so does
-// the tools library's plain-Bullet reference (sim::RawRagdoll), so both are judged by one definition. Public but
-// internal in spirit (not part of afb/afb.h).
+// What every ragdoll representation measures the same way: body states, how far a figure constraint is from holding,
+// and whether the figure is at rest by its own rules (docs/format.md §6.1). bullet::Ragdoll uses them, and so does the
+// tools library's plain-Bullet reference (sim::RawRagdoll), so both are judged by one definition. Public but internal
+// in spirit (not part of afb/afb.h).
 #include <memory>
 #include <span>
 #include <utility>
@@ -57,7 +57,7 @@ std::vector<figure::BodyState> bodyStatesOf(BodyList bodies);
 /// Bodies Bullet is simulating now (not asleep).
 int awakeCountOf(BodyList bodies);
 
-/// The engine's TestIfAtRest (af-format §6.1) over a figure's bodies, one call per simulation step: speeds and
+/// The engine's TestIfAtRest (docs/format.md §6.1) over a figure's bodies, one call per simulation step: speeds and
 /// accelerations under the suspend speeds, or no body moved more than noMoveTranslation / noMoveRotation over a
 /// noMoveTime window, within the min/max move times.
 class RestTest {

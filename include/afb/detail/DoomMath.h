@@ -1,5 +1,5 @@
 #pragma once
-// The engine's angle and basis helpers (af-format §0), expressed in standard column math. Results are what the
+// The engine's angle and basis helpers (docs/format.md §0), expressed in standard column math. Results are what the
 // engine computes; only the representation differs (columns here, rows in Doom's idMat3).
 #include <Eigen/Core>
 
@@ -9,7 +9,7 @@ namespace afb::figure {
 inline constexpr double kRadPerDeg = 0.017453292519943295769;
 
 /// idAngles(pitch, yaw, roll).ToMat3() as a standard rotation R = Rz(yaw)·Ry(pitch)·Rx(roll): its columns are
-/// forward, left and up. Degrees; positive pitch points the nose down (af-format §0).
+/// forward, left and up. Degrees; positive pitch points the nose down (docs/format.md §0).
 Eigen::Matrix3d anglesToRotation(double pitchDeg, double yawDeg, double rollDeg);
 
 /// The inverse of anglesToRotation: (pitch, yaw, roll) in degrees of a proper rotation, pitch in [−90, 90]; at
@@ -31,7 +31,7 @@ Eigen::Vector3d normalVectorsLeft(const Eigen::Vector3d& v);
 Eigen::Vector3d orthogonalBasisLeft(const Eigen::Vector3d& v);
 
 /// The engine's rotation of θ about a non-unit axis of length L, seen as an angle about the unit axis
-/// (af-format §4.5): g(θ) = atan2(L·sin θ, 1 − L²(1 − cos θ)). Radians in, radians out; g = θ (wrapped) for L = 1.
+/// (docs/format.md §4.5): g(θ) = atan2(L·sin θ, 1 − L²(1 − cos θ)). Radians in, radians out; g = θ (wrapped) for L = 1.
 double nonUnitAxisAngle(double thetaRad, double axisLength);
 
 } // namespace afb::figure

@@ -1,5 +1,5 @@
 #pragma once
-// The one idTech4 lexer (af-format §1.1) shared by .af, .def, .md5mesh and .md5anim.
+// The one idTech4 lexer (docs/format.md §1.1) shared by .af, .def, .md5mesh and .md5anim.
 #include <cstdint>
 #include <deque>
 #include <optional>

@@ -1,5 +1,5 @@
 #pragma once
-// Constraints Bullet has no class for, written as btTypedConstraint / btActionInterface (af-format §4), and the
+// Constraints Bullet has no class for, written as btTypedConstraint / btActionInterface (docs/format.md §4), and the
 // slider as Bullet's own class sets it up (shared by bullet::Ragdoll and sim::RawRagdoll).
 #include <memory>
 
@@ -15,7 +15,7 @@ struct LimitRow {
     btScalar excess; ///< radians past the limit (> 0), or minus the gap still left before it (≤ 0, speculative)
 };
 
-/// Shapes of a direction limit (af-format §4.3).
+/// Shapes of a direction limit (docs/format.md §4.3).
 enum class LimitShape { Cone, Pyramid };
 
 /// The rows of a direction limit on `shaftWorld` (unit) against `basisWorld` (columns f, l, u; a cone's axis is
@@ -25,7 +25,7 @@ enum class LimitShape { Cone, Pyramid };
 int directionLimitRows(const btVector3& shaftWorld, const btMatrix3x3& basisWorld, LimitShape shape, btScalar half1Rad,
                        btScalar half2Rad, btScalar marginRad, LimitRow rows[2]);
 
-/// The row of a hinge range: φ (the rotation of frame A relative to frame B about B's Z axis, af-format §4.5)
+/// The row of a hinge range: φ (the rotation of frame A relative to frame B about B's Z axis, docs/format.md §4.5)
 /// within [lowerRad, upperRad]. Rows whose excess is above −`marginRad` are returned. Returns 0 or 1.
 int hingeRangeRow(const btMatrix3x3& frameAWorld, const btMatrix3x3& frameBWorld, btScalar lowerRad, btScalar upperRad,
                   btScalar marginRad, LimitRow& row);
@@ -87,7 +87,7 @@ class HingeRangeConstraint : public btTypedConstraint {
     btScalar m_margin = 0;                      ///< the margin getInfo1 counted rows with (getInfo2 agrees)
 };
 
-/// A universal joint (af-format §4.4) as four rows that always exist: the anchors together (three rows, as
+/// A universal joint (docs/format.md §4.4) as four rows that always exist: the anchors together (three rows, as
 /// btPoint2PointConstraint) and no relative spin about the bisector of the two shafts (the constant-velocity
 /// condition), with the twist between the two frames, each turned halfway through their swing, as its position
 /// error (twist()). Frames' X axes are the shafts (A's shaft 1, B's −shaft 2: aligned at the load pose).
@@ -106,7 +106,7 @@ class UniversalConstraint : public btTypedConstraint {
     btTransform m_frameInA, m_frameInB;
 };
 
-/// Joint friction (af-format §4.8): rows that resist the relative angular velocity on the free axes, each bounded
+/// Joint friction (docs/format.md §4.8): rows that resist the relative angular velocity on the free axes, each bounded
 /// by `maxImpulse` per step (set from the joint's own reaction, see Ragdoll). Axes are fixed in body B (world for
 /// a world joint); `count` of the three columns of `axesInB` are used (ball 3, universal 2, hinge 1).
 class JointFrictionConstraint : public btTypedConstraint {
@@ -126,26 +126,27 @@ class JointFrictionConstraint : public btTypedConstraint {
     btScalar m_maxImpulse = 0;
 };
 
-/// A spring (af-format §4.7) between anchors fixed in A and B: the quadratic force F = k·ΔL² (stretch above the
-/// rest length, compress below) minus D = damping·|Δv·n|/L, plus one-sided length rows below `minLength` and
-/// above `maxLength` (when > 0). The force enters the solver as a row whose impulse is pinned to F·dt, so it is
-/// integrated exactly where gravity is (an impulse applied outside the step would meet Bullet's damping first and
-/// settle at F = m·g / damping factor instead of m·g).
+/// A spring (docs/format.md §4.7) between anchors fixed in A and B: the quadratic force F = k·ΔL² (stretch above the
+/// rest length, compress below) minus D = damping·|Δv·n|/L, plus one-sided length rows below `minLength` and above
+/// `maxLength` (when > 0). The force enters the solver as a row whose impulse is pinned to F·dt, so it is integrated
+/// exactly where gravity is (an impulse applied outside the step would meet Bullet's damping first and settle at F =
+/// m·g / damping factor instead of m·g).
 ///
-/// Hostile numbers (issue 17): an explicit force is stable only while k·|ΔL|·dt² stays below about the effective
-/// mass of the row (the two bodies' inverse masses plus each anchor's lever arm through its inverse inertia). A
-/// spring far beyond its rest length on an anchor far from its body's centre (a missing anchor2 defaults to the
-/// model origin) exceeds that by orders of magnitude and overflows in a few steps. So each step's impulse is
-/// bounded: the spring term by the impulse that would close the whole ΔL in that one step, the damping term by the
-/// impulse that would stop the anchors' relative motion along the spring. Within the bounds (every bundled spring
-/// through a drop, tests/sim/test_hostile_springs.cpp) the engine's force is applied unchanged.
+/// Hostile numbers (docs/stability.md): an explicit force is stable only while k·|ΔL|·dt² stays below about the
+/// effective mass of the row (the two bodies' inverse masses plus each anchor's lever arm through its inverse inertia).
+/// A spring far beyond its rest length on an anchor far from its body's centre (a missing anchor2 defaults to the model
+/// origin) exceeds that by orders of magnitude and overflows in a few steps. So each step's impulse is bounded: the
+/// spring term by the impulse that would close the whole ΔL in that one step, the damping term by the impulse that
+/// would stop the anchors' relative motion along the spring. Within the bounds (every bundled spring through a drop,
+/// tests/sim/test_hostile_springs.cpp) the engine's force is applied unchanged.
 class SpringConstraint : public btTypedConstraint {
   public:
     struct Params {
         btScalar stretch = 0, compress = 0; ///< N/m²
-        btScalar damping = 0;               ///< N per m/s of relative speed along the spring, scaled as §4.7
+        /// N per m/s of relative speed along the spring, scaled as docs/format.md §4.7.
+        btScalar damping = 0;
         btScalar restLength = 0, minLength = 0, maxLength = 0; ///< m
-        /// The figure's spring (af-format §4.7) in Bullet's precision; both backends build theirs from it.
+        /// The figure's spring (docs/format.md §4.7) in Bullet's precision; both backends build theirs from it.
         static Params of(const figure::SpringParams& spring);
     };
     SpringConstraint(btRigidBody& a, btRigidBody& b, const btVector3& anchorInA, const btVector3& anchorInB,
@@ -168,7 +169,7 @@ class SpringConstraint : public btTypedConstraint {
         btVector3 ra, rb, n;
         btScalar length;
     };
-    /// The engine's force split into its terms (§4.7): pulls together by sign·(spring − damping), N.
+    /// The engine's force split into its terms (docs/format.md §4.7): pulls together by sign·(spring − damping), N.
     struct Terms {
         btScalar sign = 0;      ///< +1 stretched, −1 compressed, 0 when the active side has no stiffness
         btScalar spring = 0;    ///< k·ΔL², N
@@ -182,7 +183,7 @@ class SpringConstraint : public btTypedConstraint {
     Params m_params;
 };
 
-/// The slider of af-format §4.6 as Bullet's own constraint: free along the frames' X axis, no rotation.
+/// The slider of docs/format.md §4.6 as Bullet's own constraint: free along the frames' X axis, no rotation.
 std::unique_ptr<btSliderConstraint> makeSlider(btRigidBody& a, btRigidBody& b, const btTransform& frameInA,
                                                const btTransform& frameInB);
 
