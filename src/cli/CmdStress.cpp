@@ -91,11 +91,11 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
                 "with entity 'humanoid'); without it they are skipped.");
     struct Options {
         std::filesystem::path base = ".";
-        // exact is the default; the iterative default it replaced stays on the front. Every
-        // method is judged on its physics alone; default+rest is the default as the library spawns a ragdoll
-        // (SpawnOptions::comeToRest, the engine's rest rules), the verdict a game sees.
-        std::vector<std::string> methods = {"raw",     "legacy",       "fast",    "iterative",
-                                            "default", "default+rest", "accurate"};
+        // Every preset, the multibody backend included. Every method is judged on its physics alone;
+        // default+rest is the default as the library spawns a ragdoll (SpawnOptions::comeToRest, the engine's rest
+        // rules), the verdict a game sees.
+        std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "iterative",
+                                            "default", "default+rest", "accurate", "multibody"};
         std::vector<std::string> scenarios;
         std::filesystem::path out = "stress";
         int threads = 2;

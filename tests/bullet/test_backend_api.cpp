@@ -10,7 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "EntityFixture.h"
-#include "afb/bullet/Convert.h"
+#include "afb/detail/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollWorld.h"
