@@ -13,6 +13,7 @@
 //   bullet::RagdollAsset         a figure's shared collision shapes
 //   bullet::Ragdoll              one live ragdoll in your world (bullet::spawnOptionsFor: the entity's flags)
 //   pose::driveSkeleton          md5 joint transforms from the bodies, by the figure's mod rules
+#include "afb/Version.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
