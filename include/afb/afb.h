@@ -17,6 +17,7 @@
 /// Everything afbullet declares, one nested namespace per layer: text, decl, figure, bullet and pose. Each layer
 /// uses only the ones before it; Bullet appears in afb::bullet alone.
 
+#include "afb/Version.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"

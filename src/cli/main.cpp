@@ -1,12 +1,39 @@
 // afb: the afbullet command-line tool.
+#include <string>
+
+#include <LinearMath/btScalar.h>
+
 #include "Commands.h"
+#include "afb/Version.h"
+
+#ifndef AFB_BUILD_TYPE
+#define AFB_BUILD_TYPE ""
+#endif
+
+namespace {
+
+/// `afb 0.1.0 (Bullet 3.24, float, Release)`: this binary's version, the Bullet it runs on and its precision (both
+/// as compiled in: btGetVersion() is inline), and the build type it was configured with.
+std::string versionLine() {
+    const int bullet = btGetVersion();
+    const std::string buildType = *AFB_BUILD_TYPE ? AFB_BUILD_TYPE : "no build type";
+#ifdef BT_USE_DOUBLE_PRECISION
+    const char* precision = "double";
+#else
+    const char* precision = "float";
+#endif
+    return "afb " AFB_VERSION_STRING " (Bullet " + std::to_string(bullet / 100) + "." + std::to_string(bullet % 100) +
+           ", " + precision + ", " + buildType + ")";
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"afb — Doom 3 articulated figures (.af) on Bullet: parse, format, resolve, inspect, drop, "
                  "golden, draw, chart, stress, gen.\n"
                  "Diagnostics go to stderr as file:line:col: error: message; exit code 1 on any error."};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "afb " AFB_VERSION);
+    app.set_version_flag("--version", versionLine());
     int exitCode = 0;
     afb::cli::addParseCommand(app, exitCode);
     afb::cli::addFmtCommand(app, exitCode);

@@ -23,6 +23,12 @@ afb_cli_test(parse_error_location 1 ARGS parse tests/cli/data/typo_in_body.af
              MATCH "typo_in_body.af:5:3: error: unknown token 'denisty' in body 'pelvis'")
 afb_cli_test(parse_missing_file 1 ARGS parse no/such/file.af MATCH "no/such/file.af: error: no such file")
 afb_cli_test(parse_unknown_type 1 ARGS parse README.md MATCH "unknown file type")
+# afb --version: the project version, the Bullet it runs on, its precision and build type; afb-double says double.
+afb_cli_test(version 0 ARGS --version
+             MATCH "^afb [0-9]+\\.[0-9]+\\.[0-9]+ \\(Bullet [0-9.]+, (float|double), " "^afb ${PROJECT_VERSION} \\(.*, float, ")
+add_test(NAME cli.version_double
+  COMMAND ${CMAKE_COMMAND} "-DCMD=$<TARGET_FILE:afb-double>;--version" "-DEXIT=0"
+          "-DMATCH=^afb ${PROJECT_VERSION} \\(Bullet [0-9.]+, double, " -P ${CMAKE_CURRENT_LIST_DIR}/expect.cmake)
 foreach(af IN LISTS _afb_bundled_af)
   get_filename_component(_n ${af} NAME_WE)
   afb_cli_test(fmt_canonical_${_n} 0 ARGS fmt --check ${af})

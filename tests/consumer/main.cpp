@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <string_view>
 
+#include <afb/Version.h>
 #include <afb/afb.h>
 
 namespace {
@@ -58,7 +59,7 @@ int main() {
         std::fprintf(stderr, "consumer: expected %zu bodies, got %zu\n", kExpectedBodies, decl.bodies.size());
         return 1;
     }
-    std::printf("consumer: parsed '%s' with %zu bodies and %zu constraints\n", decl.name.c_str(), decl.bodies.size(),
-                decl.constraints.size());
+    std::printf("consumer: afbullet %s parsed '%s' with %zu bodies and %zu constraints\n", AFB_VERSION_STRING,
+                decl.name.c_str(), decl.bodies.size(), decl.constraints.size());
     return 0;
 }
