@@ -99,13 +99,15 @@ class RagdollAsset {
     RigidLayout layoutAt(const figure::LodLevel& level, std::span<const figure::Transform> poses,
                          std::vector<std::unique_ptr<btCollisionShape>>& compounds) const;
 
-    /// Bytes and objects one instance's Bullet objects took (the most of any instance so far; 0 before the
-    /// first): Ragdoll sizes its arena from it. Thread-safe; not for callers.
+  private:
+    // Ragdoll sizes each instance's arena from what earlier instances took.
+    friend class Ragdoll;
+    // Bytes and objects one instance's Bullet objects took (the most of any instance so far; 0 before the
+    // first): Ragdoll sizes its arena from it. Thread-safe.
     std::pair<std::size_t, std::size_t> instanceArenaHint() const {
         return {m_arenaBytes.load(std::memory_order_relaxed), m_arenaObjects.load(std::memory_order_relaxed)};
     }
-    /// Records what one instance's Bullet objects took, raising instanceArenaHint. Thread-safe; called by Ragdoll,
-    /// not for callers.
+    // Records what one instance's Bullet objects took, raising instanceArenaHint. Thread-safe.
     void noteInstanceArena(std::size_t bytes, std::size_t objects) const {
         for (std::size_t seen = m_arenaBytes.load(std::memory_order_relaxed);
              bytes > seen && !m_arenaBytes.compare_exchange_weak(seen, bytes, std::memory_order_relaxed);) {
@@ -115,7 +117,6 @@ class RagdollAsset {
         }
     }
 
-  private:
     explicit RagdollAsset(figure::Figure figure) : m_figure(std::move(figure)) {}
     figure::Figure m_figure;
     std::vector<std::unique_ptr<btCollisionShape>> m_shapes;

@@ -94,19 +94,22 @@ class RagdollWorld {
     /// ragdoll), or null: what a ray or contact test hit (then Ragdoll::figureBodyOf for the body).
     Ragdoll* ragdollOf(const btCollisionObject* object) const;
 
-    /// Ragdolls register themselves here (Ragdoll's constructor and destructor); not for callers.
+  private:
+    // A ragdoll registers itself (its constructor and destructor), and tells of a guard's restore and of a level of
+    // detail's new Bullet objects.
+    friend class Ragdoll;
+    // Ragdolls register themselves here (Ragdoll's constructor and destructor).
     void attach(Ragdoll& ragdoll);
-    /// Unregisters a ragdoll (its destructor); not for callers.
+    // Unregisters a ragdoll (its destructor).
     void detach(Ragdoll& ragdoll);
-    /// Forgets the ragdoll's warm-started joint impulses (its explosion guard restored it); not for callers.
+    // Forgets the ragdoll's warm-started joint impulses (its explosion guard restored it).
     void restartWarmStarting(Ragdoll& ragdoll);
-    /// Forget the ragdoll's Bullet bodies and constraints before it replaces them, and learn the new ones after
-    /// (Ragdoll::setLod); it keeps its place. Not for callers.
+    // Forget the ragdoll's Bullet bodies and constraints before it replaces them, and learn the new ones after
+    // (Ragdoll::setLod); it keeps its place.
     void detachBodies(Ragdoll& ragdoll);
-    /// Learns the ragdoll's new Bullet bodies and constraints (the second half of detachBodies); not for callers.
+    // Learns the ragdoll's new Bullet bodies and constraints (the second half of detachBodies).
     void attachBodies(Ragdoll& ragdoll);
 
-  private:
     class PositionAction;
     class MergedBodies;
     void addOwners(Ragdoll& ragdoll, int index);
