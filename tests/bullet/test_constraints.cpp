@@ -324,7 +324,7 @@ TEST_CASE("fixed: the relative pose holds under load", "[bullet][constraints]") 
     CHECK(angleBetween(scene.relative().getColumn(0), btVector3(1, 0, 0)) < 1 * kDeg);
 }
 
-TEST_CASE("spring: quadratic force settles where k·ΔL² = m·g; maxLength holds", "[bullet][constraints]") {
+TEST_CASE("spring: quadratic force settles where k·ΔL² = m·g / maxLength holds", "[bullet][constraints]") {
     // The arm hangs from the top by a spring at its centre of mass (10, 0, 100) to (10, 0, 110): rest 10 units.
     auto springFigure = [](const std::string& extra) {
         return "articulatedFigure t {\n settings { selfCollision 0 }\n"

@@ -464,7 +464,7 @@ TEST_CASE("both backends: joint friction takes the same share of a swinging hing
     }
 }
 
-TEST_CASE("both backends: a spring settles where k·ΔL² = m·g; its length rows hold", "[bullet][multibody]") {
+TEST_CASE("both backends: a spring settles where k·ΔL² = m·g / its length rows hold", "[bullet][multibody]") {
     // §4.7's force is quadratic: F = k·(L − rest)², so the arm (16 kg) hanging from the top by a spring alone
     // (anchors at its centre of mass and 10 units straight above it: no torque) settles at ΔL = √(m·g/k). For
     // the multibody backend the two bodies are two trees (a spring is not a tree edge): the row spans both. One air

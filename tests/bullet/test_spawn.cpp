@@ -317,7 +317,7 @@ TEST_CASE("bullet: margins keep every shape inside its polytope and touching eve
     for (const NamedFigure& f : zsecFigures(*corpus)) checkMargins(f.name, f.figure);
 }
 
-TEST_CASE("bullet: ragdolls of one asset share shapes; destroying one removes its objects", "[bullet]") {
+TEST_CASE("bullet: ragdolls of one asset share shapes / destroying one removes its objects", "[bullet]") {
     World w;
     const auto asset = RagdollAsset::create(chainFigure());
     const int bodies = static_cast<int>(asset->figure().bodies.size());

@@ -1003,7 +1003,7 @@ TEST_CASE("af: settings errors", "[af][settings][error]") {
 // Constraints (§1.7)
 // -------------------------------------------------------------------------------------------------------------
 
-TEST_CASE("af: constraint defaults are left to the consumer; body1 defaults by parse order", "[af][constraint]") {
+TEST_CASE("af: constraint defaults are left to the consumer / body1 defaults by parse order", "[af][constraint]") {
     const AfDecl d = parseOne(fig(R"(
 fixed "before" { }
 body "first" { joint "origin" }

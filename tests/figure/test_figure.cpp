@@ -623,7 +623,7 @@ TEST_CASE("figure: rest rules in SI (§1.3, §6.1)", "[figure]") {
     CHECK(r.maxMoveTimeS == Approx(8));
 }
 
-TEST_CASE("figure: a cone's apex is at the body-local origin; its COM is 3/4 of the height below (§2.2, §3.1)",
+TEST_CASE("figure: a cone's apex is at the body-local origin / its COM is 3/4 of the height below (§2.2, §3.1)",
           "[figure]") {
     const Built b = build(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model cone( ( -3, -3, 0 ), ( 3, 3, 10 ), 6 ) origin ( 0, 0, 40 ) }
@@ -842,7 +842,7 @@ TEST_CASE("figure: hinge range φ ∈ [a2 − a0 − a1/2, a2 − a0 + a1/2] (§
     CHECK(std::holds_alternative<std::monostate>(b.constraint("free").limit));
 }
 
-TEST_CASE("figure: body2 typo attaches to the world with a warning; body1 unknown is an error (§1.7)", "[figure]") {
+TEST_CASE("figure: body2 typo attaches to the world with a warning / body1 unknown is an error (§1.7)", "[figure]") {
     SECTION("body2") {
         const Built b = build(std::string("articulatedFigure t {") + kSimpleBodies + R"(
 	hinge "h" {
@@ -1077,7 +1077,7 @@ TEST_CASE("figure findings: joints contained by no body or by two (§5.3)", "[fi
     CHECK(b.body("pelvis").containedJoints == std::vector<int>{0, 1});
 }
 
-TEST_CASE("figure: an omitted containedJoints means \"*origin\"; the later body wins (§5.3, §8 item 4)", "[figure]") {
+TEST_CASE("figure: an omitted containedJoints means `*origin` / the later body wins (§5.3, §8 item 4)", "[figure]") {
     const Built b = build(R"(articulatedFigure t {
 	body "pelvis" { joint "origin" model box( ( -6, -8, -4 ), ( 6, 8, 4 ) ) origin joint( "Hips" ) containedJoints "*Hips" }
 	body "chest" { joint "Spine" model box( ( -5, -7, 0 ), ( 5, 7, 16 ) ) origin joint( "Spine" ) }

@@ -155,7 +155,7 @@ TEST_CASE("limit excess: hinge ranges, off-centre and across ±180° (§4.5)", "
     }
 }
 
-TEST_CASE("limit excess: none without a limit; a common rotation (a world constraint's spawn) changes nothing",
+TEST_CASE("limit excess: none without a limit / a common rotation (a world constraint's spawn) changes nothing",
           "[figure][limits]") {
     FigureConstraint free;
     free.type = JointType::BallAndSocket;

@@ -210,7 +210,7 @@ TEST_CASE("mass: bone closed form, COM at the body origin", "[figure][mass]") {
         }
 }
 
-TEST_CASE("mass: translation moves only the COM; rotation turns the tensor", "[figure][mass]") {
+TEST_CASE("mass: translation moves only the COM / rotation turns the tensor", "[figure][mass]") {
     const Vector3d min(-3, -5, -1), max(7, 2, 11), shift(100, -250, 37.5);
     const MassProperties base = computeMassProperties(afb::figure::makeBox(min, max), 2.0);
     const MassProperties moved = computeMassProperties(afb::figure::makeBox(min + shift, max + shift), 2.0);

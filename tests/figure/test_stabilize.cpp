@@ -54,7 +54,7 @@ TEST_CASE("stabilize: a chain converges within the ratio and keeps its total mas
     CHECK_FALSE(figure::needsStabilizing(s, {.maxMassRatio = 10.0 * 1.001}));
 }
 
-TEST_CASE("stabilize: thin bodies get an inertia floor; balanced figures are untouched", "[figure][stabilize]") {
+TEST_CASE("stabilize: thin bodies get an inertia floor / balanced figures are untouched", "[figure][stabilize]") {
     figure::Figure f = chain({2, 3});
     f.bodies[0].inertiaKgM2 = Eigen::Vector3d(1, 1, 0.001);
     CHECK(figure::needsStabilizing(f));

@@ -154,7 +154,7 @@ TEST_CASE("bodyStatesFromAnimation reports an animation that does not fit, never
     CHECK(fails(walk, 0.1, std::numeric_limits<double>::quiet_NaN()));
 }
 
-TEST_CASE("bodyStatesFromAnimation spawns: setBodyStates takes it; spawnOptionsFor carries the rest flag",
+TEST_CASE("bodyStatesFromAnimation spawns: setBodyStates takes it / spawnOptionsFor carries the rest flag",
           "[figure][placement][runtime]") {
     const auto loaded = loadEntity("humanoid");
     const auto& f = loaded.figure;
@@ -172,9 +172,11 @@ TEST_CASE("bodyStatesFromAnimation spawns: setBodyStates takes it; spawnOptionsF
     REQUIRE(ragdoll.setBodyStates(states));
     for (int i = 0; i < ragdoll.bodyCount(); ++i) {
         const auto& s = states[static_cast<std::size_t>(i)];
-        const btRigidBody& b = ragdoll.body(i);
-        CHECK((afb::bullet::toEigen(b.getCenterOfMassPosition()) - s.pose.position).norm() <= 1e-5);
-        CHECK((afb::bullet::toEigen(b.getLinearVelocity()) - s.linearVelocity).norm() <= 1e-5);
-        CHECK((afb::bullet::toEigen(b.getAngularVelocity()) - s.angularVelocity).norm() <= 1e-5);
+        // The body's own frame, also where fixed joints were merged into one rigid body: its velocity is then the
+        // rigid's at its centre, which differs from the animation's by the little the fixed joint moved in it.
+        const BodyState b = ragdoll.bodyState(i);
+        CHECK((b.pose.position - s.pose.position).norm() <= 1e-5);
+        CHECK((b.linearVelocity - s.linearVelocity).norm() <= 1e-4);
+        CHECK((b.angularVelocity - s.angularVelocity).norm() <= 1e-5);
     }
 }

@@ -20,6 +20,7 @@
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/decl/Library.h"
+#include "afb/detail/Convert.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Scene.h"
 
@@ -142,9 +143,8 @@ int main(int argc, char** argv) {
             Ragdoll& r = *l.ragdoll;
             if (l.stepsLeft == l.hitAt) {
                 const int body = static_cast<int>(rng() % static_cast<unsigned>(r.bodyCount()));
-                const btVector3 at(r.bodyState(body).pose.position.x(), r.bodyState(body).pose.position.y(),
-                                   r.bodyState(body).pose.position.z());
-                n.hits += r.applyBodyImpulse(body, btVector3(0, 0, 1) * btScalar(3 * r.impulseThresholdNs()), at);
+                const btVector3 at = afb::bullet::toBt(Eigen::Vector3d(r.bodyState(body).pose.position));
+                n.hits += r.applyBodyImpulse(body, btVector3(0, 0, btScalar(3 * r.impulseThresholdNs())), at);
             }
             if (l.stepsLeft == l.poisonAt) {
                 std::vector<afb::figure::BodyState> states = r.bodyStates();
