@@ -57,8 +57,10 @@ drop_options=(
 )
 for preset in "${presets[@]}"; do
   for options in "${drop_options[@]}"; do
+    seconds="--seconds 0.5"
+    [[ "$options" == *--seconds* ]] && seconds=""
     # shellcheck disable=SC2086  # the options are words
-    run "drop $preset $options" "$afb" drop --base . humanoid chain --method "$preset" --seconds 0.5 $options
+    run "drop $preset $options" "$afb" drop --base . humanoid chain --method "$preset" $seconds $options
   done
   # Sunk ragdolls: figures that spawn at rest beside an awake one, long enough to freeze and sink.
   run "drop $preset sunk" "$afb" drop --base . humanoid_sleeping humanoid --count 2 --method "$preset" --seconds 2

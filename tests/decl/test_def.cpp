@@ -317,7 +317,7 @@ TEST_CASE("loadDef reports a missing file", "[def]") {
     CHECK(diags.hasErrors());
 }
 
-TEST_CASE("a '\\' between strings continues the string (LEXFL_ALLOWBACKSLASHSTRINGCONCAT)", "[def]") {
+TEST_CASE("a backslash between strings continues the string (LEXFL_ALLOWBACKSLASHSTRINGCONCAT)", "[def]") {
     // As in monster_default.def's "editor_var trigger"; the shared lexer joins the strings.
     text::Diagnostics diags;
     const auto f =
