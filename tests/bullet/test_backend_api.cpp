@@ -10,10 +10,10 @@
 #include <Eigen/Geometry>
 
 #include "EntityFixture.h"
-#include "afb/detail/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollWorld.h"
+#include "afb/detail/Convert.h"
 #include "afb/sim/Scene.h"
 
 namespace {
