@@ -18,6 +18,7 @@
 /// uses only the ones before it; Bullet appears in afb::bullet alone.
 
 #include "afb/Version.h"
+#include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
