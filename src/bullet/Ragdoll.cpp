@@ -530,6 +530,7 @@ void Ragdoll::sink() {
 void Ragdoll::surface() {
     if (!m_restProxy) return;
     m_world.removeCollisionObject(m_restProxy.get());
+    if (m_manager) m_manager->forget(m_restProxy.get());
     m_restProxy.reset();
     m_restProxyShape.reset();
     for (std::size_t i = 0; i < m_bodies.size(); ++i)

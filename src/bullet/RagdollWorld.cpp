@@ -460,7 +460,9 @@ void RagdollWorld::OwnerTable::rehash() {
         if (o.ragdoll >= 0) insert(o);
 }
 
-void RagdollWorld::OwnerTable::removeRagdoll(int index, bool renumber) {
+void RagdollWorld::OwnerTable::removeRagdoll(int index, bool renumber, std::vector<const btCollisionObject*>& bodies) {
+    for (const BodyOwner& o : m_slots)
+        if (o.ragdoll == index) bodies.push_back(o.body);
     // One pass over the slots, without branches on their contents (empty and removed slots hold ragdoll −1, which
     // is neither `index` nor above it): the ragdoll's entries become removed keys, later ragdolls' indices go down.
     std::size_t gone = 0;
@@ -493,6 +495,12 @@ btScalar RagdollWorld::breakingThreshold(const btCollisionObject* a, const btCol
     return btMin(btScalar(kMaxSpeculativeM), gContactBreakingThreshold + reachOf(a, dt) + reachOf(b, dt));
 }
 
+namespace {
+bool named(const std::vector<const btCollisionObject*>& objects, const btCollisionObject* o) {
+    return !objects.empty() && std::find(objects.begin(), objects.end(), o) != objects.end();
+}
+} // namespace
+
 int RagdollWorld::substepsFor(double dtSeconds) const {
     const int least = std::max(1, m_method.substeps);
     if (m_method.impactSubsteps <= least) return least;
@@ -502,7 +510,8 @@ int RagdollWorld::substepsFor(double dtSeconds) const {
     btDispatcher& dispatcher = *m_world.getDispatcher();
     for (int i = 0, n = dispatcher.getNumManifolds(); i < n; ++i) {
         const btPersistentManifold& m = *dispatcher.getManifoldByIndexInternal(i);
-        if (m.getNumContacts() == 0) continue;
+        if (m.getNumContacts() == 0 || named(m_goneObjects, m.getBody0()) || named(m_goneObjects, m.getBody1()))
+            continue;
         const btRigidBody* a = btRigidBody::upcast(m.getBody0());
         const btRigidBody* b = btRigidBody::upcast(m.getBody1());
         if (a == nullptr || b == nullptr || a->isStaticOrKinematicObject() || b->isStaticOrKinematicObject()) continue;
@@ -523,6 +532,9 @@ void RagdollWorld::step(double dtSeconds) {
     for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step
     const int substeps = substepsFor(dtSeconds);
     m_lastSubsteps = substeps;
+    // The step's first substep releases the manifolds that may name them; objects destroyed from now on (a sunk
+    // ragdoll surfacing within the step, say) are kept for the next frame's substepsFor.
+    m_goneObjects.clear();
     m_world.stepSimulation(static_cast<btScalar>(dtSeconds), substeps, static_cast<btScalar>(dtSeconds / substeps));
 }
 
@@ -553,7 +565,7 @@ void RagdollWorld::detachBodies(Ragdoll& r) {
     const auto it = std::find(m_ragdolls.begin(), m_ragdolls.end(), &r);
     if (it == m_ragdolls.end()) return;
     const int index = static_cast<int>(it - m_ragdolls.begin());
-    m_owners.removeRagdoll(index, false);
+    m_owners.removeRagdoll(index, false, m_goneObjects);
 }
 
 void RagdollWorld::attachBodies(Ragdoll& r) {
@@ -593,7 +605,7 @@ void RagdollWorld::detach(Ragdoll& r) {
     const int gone = static_cast<int>(it - m_ragdolls.begin());
     m_ragdolls.erase(it);
     // Its bodies leave the owner table, later ragdolls move down one place: no re-sort, no shape queries.
-    m_owners.removeRagdoll(gone, true);
+    m_owners.removeRagdoll(gone, true, m_goneObjects);
 }
 
 // The ragdoll's collision objects (one per rigid body: merged bodies share one) join the owner table.

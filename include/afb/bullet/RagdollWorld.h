@@ -109,6 +109,8 @@ class RagdollWorld {
     void detachBodies(Ragdoll& ragdoll);
     // Learns the ragdoll's new Bullet bodies and constraints (the second half of detachBodies).
     void attachBodies(Ragdoll& ragdoll);
+    // A collision object of the ragdoll's (a sunk ragdoll's box) leaves the world and is destroyed.
+    void forget(const btCollisionObject* object) { m_goneObjects.push_back(object); }
 
     class PositionAction;
     class MergedBodies;
@@ -134,8 +136,9 @@ class RagdollWorld {
       public:
         const BodyOwner* find(const btCollisionObject* body) const;
         void insert(const BodyOwner& owner); ///< a body already present keeps its entry
-        /// Removes ragdoll `index`'s bodies; later ragdolls' indices go down by one when `renumber`.
-        void removeRagdoll(int index, bool renumber);
+        /// Removes ragdoll `index`'s bodies (appended to `gone`); later ragdolls' indices go down by one when
+        /// `renumber`.
+        void removeRagdoll(int index, bool renumber, std::vector<const btCollisionObject*>& gone);
 
       private:
         std::size_t slotOf(const btCollisionObject* body) const;
@@ -154,6 +157,10 @@ class RagdollWorld {
     /// The substeps of a frame of `dtSeconds`: the method's, or more for a fast impact (Method::impactSubsteps).
     int substepsFor(double dtSeconds) const;
     int m_lastSubsteps = 1;
+    /// Ragdoll collision objects destroyed since the last step. Bullet keeps the last step's speculative (CCD)
+    /// manifolds until the next step begins, and they may still name them: substepsFor skips those manifolds
+    /// without reading the objects.
+    std::vector<const btCollisionObject*> m_goneObjects;
     std::unique_ptr<PositionAction> m_action;
     std::unique_ptr<MergedBodies> m_mergedBodies; ///< contacts of merged bodies (Method::mergeFixed), child by child
 };
