@@ -16,137 +16,176 @@ using direct::sideB;
 using direct::SideJ;
 using direct::Vec;
 
-btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal) {
-    Direct& d = *m_direct;
-    auto& pool = m_tmpSolverNonContactConstraintPool;
+namespace {
+
+double rowVelocity(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
+    return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(bodyPool[c.m_solverBodyIdA],
+                                                                      bodyPool[c.m_solverBodyIdB], c));
+}
+
+} // namespace
+
+double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
+                                          const btAlignedObjectArray<btSolverConstraint>& pool) {
     double residual = 0;
-    auto relVel = [&](const btSolverConstraint& c) {
-        return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(m_tmpSolverBodyPool[c.m_solverBodyIdA],
-                                                                          m_tmpSolverBodyPool[c.m_solverBodyIdB], c));
-    };
-    // The joints of every group, exactly.
-    for (Direct::Group& group : d.live()) {
+    for (Group& group : live()) {
         const Eigen::Index n = static_cast<Eigen::Index>(group.rows.size());
-        d.e.resize(static_cast<std::size_t>(n));
-        Eigen::Map<Vec> e(d.e.data(), n);
+        e.resize(static_cast<std::size_t>(n));
+        Eigen::Map<Vec> err(e.data(), n);
         double largest = residual; // kept in a register over the rows
         for (Eigen::Index i = 0; i < n; ++i) {
             const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
-            e(i) = group.target(i) - group.cfm(i) * group.lambda(i) - relVel(c);
-            largest = std::max(largest, e(i) * e(i));
+            err(i) = group.target(i) - group.cfm(i) * group.lambda(i) - rowVelocity(bodyPool, c);
+            largest = std::max(largest, err(i) * err(i));
         }
         residual = largest;
         if (group.useTree) {
             // H [Δv; Δλ] = [0; −e]: the bodies' velocity changes come out with the impulses.
-            d.scratch.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
+            scratch.assign(static_cast<std::size_t>(group.tree.size()), 0.0);
             for (Eigen::Index i = 0; i < n; ++i)
-                d.scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])] = -e(i);
-            group.tree.solve(d.scratch.data());
-            if (!std::all_of(d.scratch.begin(), d.scratch.end(), [](double v) { return std::isfinite(v); })) continue;
+                scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])] = -err(i);
+            group.tree.solve(scratch.data());
+            if (!std::all_of(scratch.begin(), scratch.end(), [](double v) { return std::isfinite(v); })) continue;
             for (Eigen::Index i = 0; i < n; ++i)
-                group.lambda(i) += d.scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
+                group.lambda(i) += scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
             for (std::size_t xb = 0; xb < group.bodies.size(); ++xb) {
-                btSolverBody& b = m_tmpSolverBodyPool[group.bodies[xb]];
-                const double* dv = d.scratch.data() + 6 * xb;
+                btSolverBody& b = bodyPool[group.bodies[xb]];
+                const double* dv = scratch.data() + 6 * xb;
                 b.m_deltaLinearVelocity += btVector3(btScalar(dv[0]), btScalar(dv[1]), btScalar(dv[2]));
                 b.m_deltaAngularVelocity += btVector3(btScalar(dv[3]), btScalar(dv[4]), btScalar(dv[5]));
             }
             continue;
         }
-        const Vec dl = group.ldlt.solve(e);
+        const Vec dl = group.ldlt.solve(err);
         if (!dl.allFinite()) continue;
         group.lambda += dl;
         for (Eigen::Index i = 0; i < n; ++i) {
-            const Direct::JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+            const JointRow& jr = group.rows[static_cast<std::size_t>(i)];
             const btScalar l = static_cast<btScalar>(dl(i));
             const btSolverConstraint& c = pool[jr.pool];
             if (jr.bodyA >= 0) {
-                btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdA];
+                btSolverBody& b = bodyPool[c.m_solverBodyIdA];
                 b.m_deltaLinearVelocity += jr.a.linInv * l;
                 b.m_deltaAngularVelocity += jr.a.angInv * l;
             }
             if (jr.bodyB >= 0) {
-                btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
+                btSolverBody& b = bodyPool[c.m_solverBodyIdB];
                 b.m_deltaLinearVelocity += jr.b.linInv * l;
                 b.m_deltaAngularVelocity += jr.b.angInv * l;
             }
         }
     }
-    // One free row: Bullet's update with the effective mass and the response of the whole group.
-    btSolverBody* const bodies = &m_tmpSolverBodyPool[0];
-    // Returns the row's residual term, dl² / invEffectiveMass² (0: no change); the caller keeps the largest.
-    auto resolve = [&](Direct::FreeRow& fr) -> double {
-        btSolverConstraint& c = *fr.c;
-        if (!fr.pending && fr.invEffectiveMass == 0) return 0;
-        const double target =
-            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
-        const double toGo = target - relVel(c);
-        if (fr.pending) {
-            if (Direct::heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit),
-                                        double(c.m_upperLimit)))
-                return 0;
-            d.complete(fr, m_tmpSolverBodyPool);
-            if (fr.invEffectiveMass == 0) return 0;
+    return residual;
+}
+
+void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl) {
+    btSolverConstraint& c = *fr.c;
+    btSolverBody* const bodies = &bodyPool[0];
+    for (int s = 0; s < 2; ++s) {
+        const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
+        const int g = fr.group[s];
+        if (g < 0) {
+            btSolverBody& b = bodyPool[id];
+            if (s == 0)
+                detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal1, c.m_angularComponentA,
+                                                                     btScalar(dl));
+            else
+                detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal2, c.m_angularComponentB,
+                                                                     btScalar(dl));
+            continue;
         }
-        double dl = toGo * fr.invEffectiveMass;
-        const double sum = double(c.m_appliedImpulse) + dl;
-        if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
-        else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
-        if (dl == 0) return 0;
-        c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
-        for (int s = 0; s < 2; ++s) {
-            const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
-            const int g = fr.group[s];
-            if (g < 0) {
-                btSolverBody& b = m_tmpSolverBodyPool[id];
-                if (s == 0)
-                    detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal1, c.m_angularComponentA,
-                                                                         btScalar(dl));
-                else
-                    detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal2, c.m_angularComponentB,
-                                                                         btScalar(dl));
-                continue;
-            }
-            if (fr.response[s] < 0) continue; // covered by side A's response
-            Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
-            const btVector3* u = d.responses.data() + fr.response[s];
-            const btScalar impulse = btScalar(dl);
-            const int* ids = group.bodies.data();
-            for (std::size_t x = 0, n = group.bodies.size(); x < n; ++x) {
-                btSolverBody& b = bodies[ids[x]];
-                addScaled(b.m_deltaLinearVelocity, u[2 * x], impulse);
-                addScaled(b.m_deltaAngularVelocity, u[2 * x + 1], impulse);
-            }
-            if (group.soft) {
-                const double* y = d.reactions.data() + fr.reaction[s];
-                for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
-            }
+        if (fr.response[s] < 0) continue; // covered by side A's response
+        Group& group = groups[static_cast<std::size_t>(g)];
+        const btVector3* u = responses.data() + fr.response[s];
+        const btScalar impulse = btScalar(dl);
+        const int* ids = group.bodies.data();
+        for (std::size_t x = 0, n = group.bodies.size(); x < n; ++x) {
+            btSolverBody& b = bodies[ids[x]];
+            addScaled(b.m_deltaLinearVelocity, u[2 * x], impulse);
+            addScaled(b.m_deltaAngularVelocity, u[2 * x + 1], impulse);
         }
-        return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
-    };
-    for (Direct::FreeRow& fr : d.nonContact)
-        if (iteration < fr.c->m_overrideNumSolverIterations) residual = std::max(residual, resolve(fr));
-    if (iteration < infoGlobal.m_numIterations) {
-        for (Direct::FreeRow& fr : d.contact) residual = std::max(residual, resolve(fr));
-        for (Direct::FreeRow& fr : d.friction) {
-            const btScalar total = m_tmpSolverContactConstraintPool[fr.c->m_frictionIndex].m_appliedImpulse;
-            if (total <= 0) continue;
-            fr.c->m_lowerLimit = -(fr.c->m_friction * total);
-            fr.c->m_upperLimit = fr.c->m_friction * total;
-            residual = std::max(residual, resolve(fr));
-        }
-        for (int j = 0; j < m_tmpSolverContactRollingFrictionConstraintPool.size(); ++j) {
-            btSolverConstraint& c = m_tmpSolverContactRollingFrictionConstraintPool[j];
-            const btScalar total = m_tmpSolverContactConstraintPool[c.m_frictionIndex].m_appliedImpulse;
-            if (total <= 0) continue;
-            const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
-            c.m_lowerLimit = -magnitude;
-            c.m_upperLimit = magnitude;
-            const btScalar r = m_resolveSingleConstraintRowGeneric(m_tmpSolverBodyPool[c.m_solverBodyIdA],
-                                                                   m_tmpSolverBodyPool[c.m_solverBodyIdB], c);
-            residual = std::max(residual, double(r) * double(r));
+        if (group.soft) {
+            const double* y = reactions.data() + fr.reaction[s];
+            for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
         }
     }
+}
+
+double RagdollSolver::Direct::resolve(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool) {
+    btSolverConstraint& c = *fr.c;
+    if (!fr.pending && fr.invEffectiveMass == 0) return 0;
+    const double target = (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
+    const double toGo = target - rowVelocity(bodyPool, c);
+    if (fr.pending) {
+        if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit))) return 0;
+        complete(fr, bodyPool);
+        if (fr.invEffectiveMass == 0) return 0;
+    }
+    double dl = toGo * fr.invEffectiveMass;
+    const double sum = double(c.m_appliedImpulse) + dl;
+    if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
+    else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
+    if (dl == 0) return 0;
+    c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
+    apply(fr, bodyPool, dl);
+    return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
+}
+
+double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& bodyPool,
+                                            btAlignedObjectArray<btSolverConstraint>& contactPool,
+                                            btAlignedObjectArray<btSolverConstraint>& rollingPool,
+                                            btSingleConstraintRowSolver rolling, int iteration, bool contacts) {
+    // In block mode the rows through the groups are the block's; the others are taken here.
+    auto inTurn = [this](const FreeRow& fr) { return figureIterations == 0 || (fr.group[0] < 0 && fr.group[1] < 0); };
+    double residual = 0;
+    for (FreeRow& fr : nonContact)
+        if (iteration < fr.c->m_overrideNumSolverIterations && inTurn(fr))
+            residual = std::max(residual, resolve(fr, bodyPool));
+    if (!contacts) return residual;
+    for (FreeRow& fr : contact)
+        if (inTurn(fr)) residual = std::max(residual, resolve(fr, bodyPool));
+    for (FreeRow& fr : friction) {
+        if (!inTurn(fr)) continue;
+        const btScalar total = contactPool[fr.c->m_frictionIndex].m_appliedImpulse;
+        if (total <= 0) continue;
+        fr.c->m_lowerLimit = -(fr.c->m_friction * total);
+        fr.c->m_upperLimit = fr.c->m_friction * total;
+        residual = std::max(residual, resolve(fr, bodyPool));
+    }
+    for (int j = 0; j < rollingPool.size(); ++j) {
+        btSolverConstraint& c = rollingPool[j];
+        const btScalar total = contactPool[c.m_frictionIndex].m_appliedImpulse;
+        if (total <= 0) continue;
+        const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
+        c.m_lowerLimit = -magnitude;
+        c.m_upperLimit = magnitude;
+        const btScalar r = rolling(bodyPool[c.m_solverBodyIdA], bodyPool[c.m_solverBodyIdB], c);
+        residual = std::max(residual, double(r) * double(r));
+    }
+    return residual;
+}
+
+btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal) {
+    Direct& d = *m_direct;
+    auto& bodies = m_tmpSolverBodyPool;
+    auto& joints = m_tmpSolverNonContactConstraintPool;
+    auto inTurn = [&](bool contacts) {
+        return d.resolveInTurn(bodies, m_tmpSolverContactConstraintPool,
+                               m_tmpSolverContactRollingFrictionConstraintPool, m_resolveSingleConstraintRowGeneric,
+                               iteration, contacts);
+    };
+    if (d.figureIterations == 0) {
+        // The joints exactly, then every other row in turn, those through the groups with the groups' response.
+        const double residual = d.solveJoints(bodies, joints);
+        return static_cast<btScalar>(std::max(residual, inTurn(iteration < infoGlobal.m_numIterations)));
+    }
+    // Block mode: the rows of Bullet's response in turn, the joints exactly, then the block, which keeps them
+    // exact; the iteration ends with joints and the block's contacts and limits solved. The joints are solved
+    // first too on the first iteration only (afterwards the last block left them exact).
+    double residual = iteration == 0 ? d.solveJoints(bodies, joints) : 0.0;
+    residual = std::max(residual, inTurn(true));
+    residual = std::max(residual, d.solveJoints(bodies, joints));
+    residual = std::max(residual, d.solveFigureBlock(bodies, iteration, true));
     return static_cast<btScalar>(residual);
 }
 

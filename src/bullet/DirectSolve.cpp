@@ -153,6 +153,7 @@ bool RagdollSolver::buildDirect() {
                       m_tmpSolverContactFrictionConstraintPool);
     d.prepareColumns(m_tmpSolverBodyPool);
     d.denseColumns(m_tmpSolverBodyPool);
+    d.block.clear(d.used);
     return true;
 }
 

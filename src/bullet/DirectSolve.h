@@ -118,6 +118,8 @@ struct RagdollSolver::Direct {
         double plain = 0;            // J M⁻¹ Jᵀ of the touching bodies alone (the row's scale)
         btScalar start = 0;          // the row's impulse before the iterations (warm start)
         bool pending = false;        // its responses through the groups are not computed yet (complete())
+        int blockIndex = -1;         // its index among the figure block's rows (−1: not in it yet)
+        int normal = -1;             // a friction row in the block: its contact's block index (−1: none)
     };
 
     // buildDirect's parts, in order: the joint rows' groups (false: none), each group's factor, the other rows,
@@ -134,6 +136,25 @@ struct RagdollSolver::Direct {
                          btAlignedObjectArray<btSolverConstraint>& frictionPool);
     void prepareColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
     void denseColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
+    // The iterations' parts (DirectIterations.cpp): the exact joint solve of every group (its residual); one free
+    // row's update (its residual) and the application of an impulse dl to it; the rows through the groups as one
+    // block, `figureSweeps` sweeps over their couplings (FigureBlock.cpp); each returns its largest residual.
+    double solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
+                       const btAlignedObjectArray<btSolverConstraint>& pool);
+    double resolve(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool);
+    void apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl);
+    double solveFigureBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
+    // The free rows taken one at a time in an iteration (all of them, or in block mode those outside the block).
+    double resolveInTurn(btAlignedObjectArray<btSolverBody>& bodyPool,
+                         btAlignedObjectArray<btSolverConstraint>& contactPool,
+                         btAlignedObjectArray<btSolverConstraint>& rollingPool, btSingleConstraintRowSolver rolling,
+                         int iteration, bool contacts);
+    // This iteration's rows of the block (joining it those that would move) and their velocity still to go.
+    void gatherBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
+    // Adds a completed row to the block with its couplings.
+    void join(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool);
+    // The change of row r's velocity per unit impulse of row s.
+    double couplingOf(const FreeRow& r, const FreeRow& s, const btAlignedObjectArray<btSolverBody>& bodyPool) const;
     static bool dynamicBody(const btSolverBody& b) {
         return b.m_originalBody != nullptr && b.m_originalBody->getInvMass() > 0;
     }
@@ -167,6 +188,28 @@ struct RagdollSolver::Direct {
 
     bool enabled = false;
     bool frictionThroughGroups = false; // Method::frictionThroughFigure
+    int figureIterations = 0;           // Method::figureIterations (0: the rows through groups one at a time)
+    int figureSweeps = 0;               // Method::figureSweeps
+    double figureTolerance = 0;         // the block's sweeps stop once no row's velocity moves by its root (m²/s²)
+    // The figure block (solveFigureBlock) of this step: every row that has joined it (a row joins when it first
+    // would move, and stays), its couplings with the rows it shares a group or a body with (the other row's index
+    // and the change of this row's velocity per unit impulse of that one, itself included), the block's rows per
+    // group, and per iteration the rows taken, their velocity still to go and the impulse each has added.
+    struct Block {
+        std::vector<FreeRow*> rows;
+        std::vector<std::vector<std::pair<int, double>>> links;
+        std::vector<std::vector<int>> ofGroup;
+        std::vector<int> plainDynamic; // rows with a side on a dynamic body of no group
+        std::vector<int> seen, taken;
+        std::vector<double> toGo, added;
+        void clear(std::size_t groups) {
+            rows.clear();
+            plainDynamic.clear();
+            if (ofGroup.size() < groups) ofGroup.resize(groups);
+            for (std::size_t g = 0; g < groups; ++g) ofGroup[g].clear();
+        }
+    };
+    Block block;
     // The groups of this step are the first `used`; the others wait, with their buffers, for a later step.
     std::vector<Group> groups;
     std::size_t used = 0;

@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 7> kPresetNames = {"fast",  "iterative", "default",  "accurate",
                                                           "exact", "legacy",    "multibody"};
 
-const std::array<MethodKnob, 28> kKnobs = {{
+const std::array<MethodKnob, 30> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"impact-substeps",
@@ -59,6 +59,12 @@ const std::array<MethodKnob, 28> kKnobs = {{
      "Joints solved exactly per ragdoll each iteration; contacts and limits move the whole ragdoll "
      "(on/off; needs a RagdollSolver)",
      &Method::directJoints},
+    {"figure-iterations",
+     "Block mode of the direct joint solve: its iterations, each ending with the ragdolls' contacts and limits "
+     "solved together (0: off; needs direct-joints)",
+     &Method::figureIterations},
+    {"figure-sweeps", "Sweeps over the ragdolls' contacts and limits in each iteration of block mode",
+     &Method::figureSweeps},
     {"merge-fixed", "Bodies joined by fixed constraints simulated as one rigid body (on/off)", &Method::mergeFixed},
     {"exempt-overlapping", "Self-collision pairs that overlap at the load pose do not collide (on/off)",
      &Method::exemptOverlapping},
@@ -79,6 +85,8 @@ Range rangeOf(std::string_view knob) {
     if (knob == "impact-substeps") return {1, 64};
     if (knob == "iterations") return {1, 1000};
     if (knob == "joint-iterations") return {0, 1000};
+    if (knob == "figure-iterations") return {0, 1000};
+    if (knob == "figure-sweeps") return {1, 1000};
     if (knob == "position-iterations") return {0, 100};
     if (knob == "position-tree") return {0, 2};
     if (knob == "friction-directions") return {1, 2};
@@ -119,6 +127,7 @@ std::span<const std::string_view> methodPresetNames() { return kPresetNames; }
 //  - fast, default and exact merge fixed joints into one body (Method::mergeFixed; docs/performance.md).
 Method iterativeJoints(Method method) {
     method.directJoints = false;
+    method.figureIterations = 0;
     method.positionTree = 0;
     method.frictionDirections = 1;
     method.constantVelocityUniversal = false;

@@ -47,7 +47,11 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
     // Contact penetration (split impulse: velocities that move the bodies this step and are then forgotten),
     // through the groups' responses too, so that lifting a foot out of the ground lifts the leg with it.
     if (infoGlobal.m_splitImpulse) solveDirectSplitImpulse(infoGlobal);
-    const int iterations = std::max(m_maxOverrideNumSolverIterations, infoGlobal.m_numIterations);
+    // Block mode has its own count (Method::figureIterations); every row takes part in each of its iterations.
+    const int iterations = m_direct->figureIterations > 0
+                               ? m_direct->figureIterations
+                               : std::max(m_maxOverrideNumSolverIterations, infoGlobal.m_numIterations);
+    m_direct->figureTolerance = double(infoGlobal.m_leastSquaresResidualThreshold);
     for (int iteration = 0; iteration < iterations; ++iteration) {
         m_leastSquaresResidual = solveDirectIteration(iteration, infoGlobal);
         if (m_leastSquaresResidual <= infoGlobal.m_leastSquaresResidualThreshold) break;
@@ -145,6 +149,13 @@ bool RagdollSolver::IslandOrder::build(const btAlignedObjectArray<btSolverBody>&
 }
 
 RagdollSolver::RagdollSolver() : m_direct(std::make_unique<Direct>()) {}
+
+void RagdollSolver::setFigureBlock(int iterations, int sweeps) {
+    m_direct->figureIterations = std::max(0, iterations);
+    m_direct->figureSweeps = std::max(1, sweeps);
+}
+int RagdollSolver::figureIterations() const { return m_direct->figureIterations; }
+int RagdollSolver::figureSweeps() const { return m_direct->figureSweeps; }
 
 RagdollSolver::~RagdollSolver() = default;
 

@@ -112,6 +112,7 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     else info.m_solverMode &= ~SOLVER_USE_2_FRICTION_DIRECTIONS;
     if (auto* solver = dynamic_cast<RagdollSolver*>(world.getConstraintSolver())) {
         solver->setDirectJoints(m.directJoints);
+        solver->setFigureBlock(m.directJoints ? m.figureIterations : 0, m.figureSweeps);
         solver->setFrictionThroughGroups(m.frictionThroughFigure);
     }
     // The direct solve takes a batch of islands (Bullet batches small islands up to m_minimumSolverBatchSize

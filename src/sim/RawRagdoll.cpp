@@ -36,6 +36,7 @@ bullet::Method rawMethod() {
     m.positionIterations = 0;
     m.positionTree = 0;
     m.directJoints = false;
+    m.figureIterations = 0;
     m.frictionThroughFigure = false;
     m.impactSubsteps = 1;
     m.speculativeContacts = false;
@@ -58,6 +59,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.positionTree > 0) knobs += " position-tree";
     if (m.positionVelocity) knobs += " position-velocity";
     if (m.directJoints) knobs += " direct-joints";
+    if (m.figureIterations > 0) knobs += " figure-iterations";
     if (m.speculativeContacts) knobs += " speculative-contacts";
     if (m.speculativeLimits) knobs += " speculative-limits";
     if (m.jointWarmStarting) knobs += " joint-warm-starting";

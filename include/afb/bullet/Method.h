@@ -148,6 +148,19 @@ struct Method {
     /// method has it on; without a RagdollSolver the world falls back to the iterative solve, methodInForce). On in
     /// default and exact.
     bool directJoints = true;
+    /// Block mode of the direct joint solve (directJoints only; a world-level knob): the solve of an island holding
+    /// a ragdoll takes this many iterations (0: off, the world's iterations as directJoints describes). Each solves
+    /// the rows of Bullet's one-body response in turn (contact friction, joint friction, contacts within one ragdoll,
+    /// rows of other bodies), then the joints exactly, then every contact and limit row that moves a whole ragdoll
+    /// together: figureSweeps Gauss–Seidel sweeps over their couplings (how each row's velocity moves per unit
+    /// impulse of the others through the ragdolls), the impulses applied to the bodies once. A sweep costs a
+    /// product over those rows instead of a pass over every body of the figure per row, so contacts and limits
+    /// converge within each iteration and few iterations are needed. A game's bodies in the same island are solved
+    /// in these iterations too. Off (0) in every preset (docs/methods.md has its measurements).
+    int figureIterations = 0;
+    /// Gauss–Seidel sweeps over the block in each iteration of block mode (figureIterations); they stop early once
+    /// no row's velocity changes by more than the square root of solverTolerance.
+    int figureSweeps = 10;
     /// Bodies joined by `fixed` constraints become one btRigidBody (a compound of their shapes, the exact combined
     /// mass properties on principal axes) instead of bodies held together by constraint rows: a fixed joint costs
     /// nothing and cannot give. Every figure body keeps its pose (bodyTransforms, the skeleton). Rigid backend only.

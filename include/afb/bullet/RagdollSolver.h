@@ -47,6 +47,16 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     void setDirectJoints(bool on);
     /// Whether the direct joint solve is on (setDirectJoints).
     bool directJoints() const;
+    /// Block mode of the direct joint solve (Method::figureIterations, Method::figureSweeps): `iterations` iterations
+    /// (0: off), each solving the rows of Bullet's response in turn, then the joints exactly, then the contact and
+    /// limit rows that move whole groups together, `sweeps` Gauss–Seidel sweeps over their couplings with the
+    /// impulses applied to the bodies once. Off: each of the world's iterations solves the joints, then every other
+    /// row in turn.
+    void setFigureBlock(int iterations, int sweeps);
+    /// Block mode's iterations (0: off; setFigureBlock).
+    int figureIterations() const;
+    /// Block mode's sweeps per iteration (setFigureBlock).
+    int figureSweeps() const;
     /// Under the direct joint solve, contact friction rows move the whole group too (Method::frictionThroughFigure),
     /// except between two bodies of one group; off (the default), they keep Bullet's one-body response.
     void setFrictionThroughGroups(bool on);

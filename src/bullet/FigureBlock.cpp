@@ -1,0 +1,177 @@
+// The rows through the groups solved as one block (Method::figureSweeps; DirectSolve.h).
+//
+// Within one iteration, after the joint solve, the contact and limit rows that move whole groups are taken
+// together: their couplings W (the change of one row's velocity per unit impulse of another, through the groups'
+// responses) are gathered once, Gauss–Seidel sweeps run on W alone, and the impulses they find are applied to the
+// bodies once. A sweep then costs a product of the block's rows, not a pass over every body of the figure per row.
+#include <algorithm>
+#include <cmath>
+
+#include "DirectSolve.h"
+#include "RowKernels.h"
+
+namespace afb::bullet {
+
+using direct::sideA;
+using direct::sideB;
+using direct::SideJ;
+
+namespace {
+
+double rowVelocity(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
+    return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(bodyPool[c.m_solverBodyIdA],
+                                                                      bodyPool[c.m_solverBodyIdB], c));
+}
+
+} // namespace
+
+double RagdollSolver::Direct::couplingOf(const FreeRow& r, const FreeRow& s,
+                                         const btAlignedObjectArray<btSolverBody>& bodyPool) const {
+    const btSolverConstraint& cr = *r.c;
+    const btSolverConstraint& cs = *s.c;
+    double w = 0;
+    for (int q = 0; q < 2; ++q) {
+        const int id = q ? cr.m_solverBodyIdB : cr.m_solverBodyIdA;
+        const SideJ jr = q ? sideB(cr, bodyPool[id]) : sideA(cr, bodyPool[id]);
+        for (int t = 0; t < 2; ++t) {
+            const int g = s.group[t];
+            if (g < 0) { // a body of no group: its own response, when it is this side's body
+                const int sid = t ? cs.m_solverBodyIdB : cs.m_solverBodyIdA;
+                if (sid != id) continue;
+                const SideJ js = t ? sideB(cs, bodyPool[sid]) : sideA(cs, bodyPool[sid]);
+                w += double(jr.lin.dot(js.linInv)) + double(jr.ang.dot(js.angInv));
+                continue;
+            }
+            if (s.response[t] < 0 || groupOf[static_cast<std::size_t>(id)] != g) continue;
+            const btVector3* u = responses.data() + s.response[t] + 2 * localOf[static_cast<std::size_t>(id)];
+            w += double(jr.lin.dot(u[0])) + double(jr.ang.dot(u[1]));
+        }
+    }
+    return w;
+}
+
+void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool) {
+    const int k = static_cast<int>(block.rows.size());
+    fr.blockIndex = k;
+    block.rows.push_back(&fr);
+    if (block.links.size() < block.rows.size()) block.links.emplace_back();
+    auto& mine = block.links[static_cast<std::size_t>(k)];
+    mine.clear();
+    block.seen.resize(block.rows.size(), -1);
+    block.seen[static_cast<std::size_t>(k)] = k;
+    auto link = [&](int j) {
+        if (block.seen[static_cast<std::size_t>(j)] == k) return;
+        block.seen[static_cast<std::size_t>(j)] = k;
+        const FreeRow& other = *block.rows[static_cast<std::size_t>(j)];
+        mine.emplace_back(j, couplingOf(fr, other, bodyPool));
+        block.links[static_cast<std::size_t>(j)].emplace_back(k, couplingOf(other, fr, bodyPool));
+    };
+    for (int t = 0; t < 2; ++t)
+        if (fr.group[t] >= 0)
+            for (const int j : block.ofGroup[static_cast<std::size_t>(fr.group[t])]) link(j);
+    const btSolverConstraint& c = *fr.c;
+    auto plainDynamic = [&](const FreeRow& row, int t) {
+        const int id = t ? row.c->m_solverBodyIdB : row.c->m_solverBodyIdA;
+        return row.group[t] < 0 && dynamicBody(bodyPool[id]) ? id : -1;
+    };
+    const int mineA = plainDynamic(fr, 0), mineB = plainDynamic(fr, 1);
+    if (mineA >= 0 || mineB >= 0) {
+        for (const int j : block.plainDynamic) {
+            const FreeRow& other = *block.rows[static_cast<std::size_t>(j)];
+            for (int t = 0; t < 2; ++t) {
+                const int id = plainDynamic(other, t);
+                if (id >= 0 && (id == mineA || id == mineB)) link(j);
+            }
+        }
+        block.plainDynamic.push_back(k);
+    }
+    mine.emplace_back(k, couplingOf(fr, fr, bodyPool));
+    for (int t = 0; t < 2; ++t)
+        if (fr.group[t] >= 0 && !(t == 1 && fr.group[0] == fr.group[1]))
+            block.ofGroup[static_cast<std::size_t>(fr.group[t])].push_back(k);
+    (void)c;
+}
+
+void RagdollSolver::Direct::gatherBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts) {
+    block.taken.clear();
+    auto consider = [&](FreeRow& fr) {
+        if (fr.group[0] < 0 && fr.group[1] < 0) return;
+        btSolverConstraint& c = *fr.c;
+        if (!fr.pending && fr.invEffectiveMass == 0) return;
+        const double target =
+            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
+        const double toGo = target - rowVelocity(bodyPool, c);
+        if (fr.pending) {
+            if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
+                return;
+            complete(fr, bodyPool);
+            if (fr.invEffectiveMass == 0) return;
+        }
+        if (fr.blockIndex < 0) join(fr, bodyPool);
+        if (&fr >= friction.data() && &fr < friction.data() + friction.size()) {
+            FreeRow& normal = contact[static_cast<std::size_t>(fr.c->m_frictionIndex)];
+            fr.normal = normal.blockIndex;
+        }
+        block.taken.push_back(fr.blockIndex);
+        block.toGo.resize(block.rows.size());
+        block.toGo[static_cast<std::size_t>(fr.blockIndex)] = toGo;
+    };
+    for (FreeRow& fr : nonContact)
+        if (iteration < fr.c->m_overrideNumSolverIterations) consider(fr);
+    if (contacts) {
+        for (FreeRow& fr : contact) consider(fr);
+        // Friction rows through the groups (Method::frictionThroughFigure): bounded by their contact's impulse,
+        // which the sweeps update; a friction row joins while its contact pushes.
+        for (FreeRow& fr : friction) {
+            if (fr.group[0] < 0 && fr.group[1] < 0) continue;
+            const FreeRow& normal = contact[static_cast<std::size_t>(fr.c->m_frictionIndex)];
+            if (normal.blockIndex < 0 && normal.c->m_appliedImpulse <= 0) continue;
+            const btScalar total = normal.c->m_appliedImpulse;
+            fr.c->m_lowerLimit = -(fr.c->m_friction * total);
+            fr.c->m_upperLimit = fr.c->m_friction * total;
+            consider(fr);
+        }
+    }
+    block.added.assign(block.rows.size(), 0.0);
+}
+
+double RagdollSolver::Direct::solveFigureBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration,
+                                               bool contacts) {
+    gatherBlock(bodyPool, iteration, contacts);
+    if (block.taken.empty()) return 0;
+    double* added = block.added.data();
+    double residual = 0;
+    for (int sweep = 0; sweep < figureSweeps; ++sweep) {
+        double largest = 0;
+        for (const int r : block.taken) {
+            const FreeRow& fr = *block.rows[static_cast<std::size_t>(r)];
+            const btSolverConstraint& c = *fr.c;
+            double v = 0;
+            for (const auto& [s, w] : block.links[static_cast<std::size_t>(r)]) v += w * added[s];
+            double dl = (block.toGo[static_cast<std::size_t>(r)] - fr.cfmVel * added[r] - v) * fr.invEffectiveMass;
+            const double applied = double(c.m_appliedImpulse) + added[r];
+            double lower = double(c.m_lowerLimit), upper = double(c.m_upperLimit);
+            if (fr.normal >= 0) { // a friction row: ± friction × its contact's impulse so far
+                const FreeRow& n = *block.rows[static_cast<std::size_t>(fr.normal)];
+                const double total = std::max(0.0, double(n.c->m_appliedImpulse) + added[fr.normal]);
+                upper = double(c.m_friction) * total;
+                lower = -upper;
+            }
+            if (applied + dl < lower) dl = lower - applied;
+            else if (applied + dl > upper) dl = upper - applied;
+            added[r] += dl;
+            largest = std::max(largest, dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass));
+        }
+        if (sweep == 0) residual = largest;
+        if (largest <= figureTolerance) break;
+    }
+    for (const int r : block.taken) {
+        if (added[r] == 0) continue;
+        FreeRow& fr = *block.rows[static_cast<std::size_t>(r)];
+        fr.c->m_appliedImpulse = fr.c->m_appliedImpulse + static_cast<btScalar>(added[r]);
+        apply(fr, bodyPool, added[r]);
+    }
+    return residual;
+}
+
+} // namespace afb::bullet
