@@ -348,7 +348,7 @@ TEST_CASE("bullet: ragdolls of one asset share shapes / destroying one removes i
     w.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60)); // nothing dangling
 }
 
-TEST_CASE("bullet: RagdollWorld::spawn adds a ragdoll the caller owns; destroying it removes it", "[bullet]") {
+TEST_CASE("bullet: RagdollWorld::spawn adds a ragdoll the caller owns, and destroying it removes it", "[bullet]") {
     World w;
     const auto asset = RagdollAsset::create(chainFigure());
     const int objects = w.world.getNumCollisionObjects();
