@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include <afb/afb.h>
@@ -59,13 +60,14 @@ int main(int argc, char** argv) try {
         lowest = std::min(lowest, lo.z());
     }
     options.entityTransform.setOrigin(btVector3(0, 0, btScalar(0.5) - lowest));
-    afb::bullet::Ragdoll ragdoll(asset, ragdollWorld, options);
+    // Yours to own: destroying it (here, at the end of main, before ragdollWorld) takes it out of the world.
+    const std::unique_ptr<afb::bullet::Ragdoll> ragdoll = ragdollWorld.spawn(asset, options);
     for (int frame = 0; frame < 120; ++frame) ragdollWorld.step(1.0 / 60.0);
 
     // 4. The skeleton a renderer would skin, in world space (metres).
-    const afb::pose::SkeletonPose skeleton = afb::pose::driveSkeleton(figure, ragdoll.bodyTransforms());
+    const afb::pose::SkeletonPose skeleton = afb::pose::driveSkeleton(figure, ragdoll->bodyTransforms());
     const std::vector<afb::figure::Transform> joints = skeleton.world();
-    std::printf("%s: %d bodies, %d md5 joints, after 2 s:\n", entity.c_str(), ragdoll.bodyCount(),
+    std::printf("%s: %d bodies, %d md5 joints, after 2 s:\n", entity.c_str(), ragdoll->bodyCount(),
                 figure.skeleton.jointCount());
     for (std::size_t i = 0; i < std::min<std::size_t>(figure.bodies.size(), 6); ++i) {
         const int j = figure.bodies[i].joint; // the md5 joint body i drives
@@ -73,8 +75,8 @@ int main(int argc, char** argv) try {
         const Eigen::Vector3d& p = joints[static_cast<std::size_t>(j)].position;
         std::printf("  %-12s (%7.3f, %7.3f, %7.3f) m\n", figure.skeleton.name(j).c_str(), p.x(), p.y(), p.z());
     }
-    std::printf("at rest: %s (%d of %d bodies awake)\n", ragdoll.atRest() ? "yes" : "no", ragdoll.awakeBodyCount(),
-                ragdoll.bodyCount());
+    std::printf("at rest: %s (%d of %d bodies awake)\n", ragdoll->atRest() ? "yes" : "no", ragdoll->awakeBodyCount(),
+                ragdoll->bodyCount());
     return 0;
 } catch (const std::exception& e) {
     return fail(e.what());

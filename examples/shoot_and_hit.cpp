@@ -6,6 +6,7 @@
 // Usage: shoot_and_hit [CONTENT_DIR] [ENTITY]   (defaults: afbullet's bundled content, humanoid)
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include <afb/afb.h>
@@ -48,11 +49,11 @@ int main(int argc, char** argv) try {
     // 1. Spawned where the entity stands (model space: the floor at z = 0), 1 cm up.
     afb::bullet::SpawnOptions options = afb::bullet::spawnOptionsFor(*loaded, method);
     options.entityTransform.setOrigin(btVector3(0, 0, btScalar(0.01)));
-    afb::bullet::Ragdoll ragdoll(asset, ragdollWorld, options);
+    const std::unique_ptr<afb::bullet::Ragdoll> ragdoll = ragdollWorld.spawn(asset, options);
     for (int frame = 0; frame < 180; ++frame) ragdollWorld.step(1.0 / 60.0);
 
     // 2. The shot: from 2 m off along +X, through the first body's centre of mass, 5 m long.
-    const btVector3 target = afb::bullet::toBt(ragdoll.bodyState(0).pose.position);
+    const btVector3 target = afb::bullet::toBt(ragdoll->bodyState(0).pose.position);
     const btVector3 gun = target + btVector3(2, 0, 0.3f);
     const btVector3 end = gun + (target - gun).normalized() * 5;
     btCollisionWorld::ClosestRayResultCallback ray(gun, end);
@@ -60,13 +61,13 @@ int main(int argc, char** argv) try {
     if (!ray.hasHit()) return fail("the shot missed");
 
     // 3. What did it hit? The ray hit a Bullet object; the ragdoll says which figure body that is (−1: not its).
-    const int body = ragdoll.figureBodyOf(*ray.m_collisionObject, ray.m_hitPointWorld);
+    const int body = ragdoll->figureBodyOf(*ray.m_collisionObject, ray.m_hitPointWorld);
     if (body < 0) return fail("the shot hit something else");
-    const auto speed = [&] { return ragdoll.bodyState(body).linearVelocity.norm(); };
+    const auto speed = [&] { return ragdoll->bodyState(body).linearVelocity.norm(); };
     const double before = speed();
     const btVector3 impulse = (end - gun).normalized() * 30; // N·s: a heavy hit
     // Always: apply it even below the engine's wake threshold (ImpulseRule::EngineThreshold would ignore those).
-    if (!ragdoll.applyBodyImpulse(body, impulse, ray.m_hitPointWorld, afb::bullet::ImpulseRule::Always))
+    if (!ragdoll->applyBodyImpulse(body, impulse, ray.m_hitPointWorld, afb::bullet::ImpulseRule::Always))
         return fail("the impulse was not applied");
     const double after = speed();
     for (int frame = 0; frame < 60; ++frame) ragdollWorld.step(1.0 / 60.0);
@@ -77,7 +78,7 @@ int main(int argc, char** argv) try {
                 figure.bodies[static_cast<std::size_t>(body)].name.c_str(), double(hit.x()), double(hit.y()),
                 double(hit.z()));
     std::printf("  speed %.3f m/s before, %.3f m/s after the impulse; 1 s later %.3f m/s, %.3f m above the ground\n",
-                before, after, speed(), ragdoll.bodyState(body).pose.position.z());
+                before, after, speed(), ragdoll->bodyState(body).pose.position.z());
     return 0;
 } catch (const std::exception& e) {
     return fail(e.what());

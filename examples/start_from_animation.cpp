@@ -6,6 +6,7 @@
 // Usage: start_from_animation [CONTENT_DIR] [ENTITY] [ANIM]   (defaults: bundled content, humanoid, walk)
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include <afb/afb.h>
@@ -67,10 +68,10 @@ int main(int argc, char** argv) try {
     // 3. The ragdoll, spawned at the same entity transform (its world-attached joints are placed by it).
     afb::bullet::SpawnOptions options = afb::bullet::spawnOptionsFor(*loaded, method);
     options.entityTransform = afb::bullet::toBt(entityPose);
-    afb::bullet::Ragdoll ragdoll(asset, ragdollWorld, options);
-    if (!ragdoll.setBodyStates(*states)) return fail("the states do not fit the ragdoll");
+    const std::unique_ptr<afb::bullet::Ragdoll> ragdoll = ragdollWorld.spawn(asset, options);
+    if (!ragdoll->setBodyStates(*states)) return fail("the states do not fit the ragdoll");
     const auto print = [&](const char* when) {
-        const afb::figure::BodyState s = ragdoll.bodyState(0);
+        const afb::figure::BodyState s = ragdoll->bodyState(0);
         std::printf("  %-9s %s at (%6.3f, %6.3f, %6.3f) m, moving %.3f m/s\n", when, figure.bodies[0].name.c_str(),
                     s.pose.position.x(), s.pose.position.y(), s.pose.position.z(), s.linearVelocity.norm());
     };

@@ -11,7 +11,7 @@
 #include "EngineFriction.h"
 #include "Multibody.h"
 #include "ObjectArena.h"
-#include "afb/bullet/RagdollWorld.h"
+#include "RagdollWorldLink.h"
 #include "afb/detail/Constraints.h"
 #include "afb/detail/Convert.h"
 #include "afb/figure/Collision.h"
@@ -159,7 +159,7 @@ class Ragdoll::Action : public btActionInterface {
         }
         for (const auto& fb : m_owner.m_feedback) *fb = btJointFeedback();
         for (const auto& c : m_owner.m_constraints) c->internalSetAppliedImpulse(0);
-        if (m_owner.m_manager) m_owner.m_manager->restartWarmStarting(m_owner);
+        if (m_owner.m_manager) detail::RagdollWorldLink::restartWarmStarting(*m_owner.m_manager, m_owner);
         m_owner.putToRest();
     }
     void report(const GuardTrip& t) {
@@ -198,13 +198,6 @@ Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& wor
     filterPairs();
     m_world.addAction(m_action.get());
     if (options.startAtRest) putToRest();
-}
-
-Ragdoll::Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world, const SpawnOptions& options)
-    : Ragdoll(std::move(asset), static_cast<btDynamicsWorld&>(world.world()), options) {
-    m_manager = &world;
-    world.attach(*this);
-    if (options.startAtRest) putToRest(); // frozen now that a RagdollWorld can wake it
 }
 
 bool Ragdoll::engineContactFriction() const { return m_engineFriction && EngineContactFriction::installed(); }
@@ -530,7 +523,7 @@ void Ragdoll::sink() {
 void Ragdoll::surface() {
     if (!m_restProxy) return;
     m_world.removeCollisionObject(m_restProxy.get());
-    if (m_manager) m_manager->forget(m_restProxy.get());
+    if (m_manager) detail::RagdollWorldLink::forget(*m_manager, m_restProxy.get());
     m_restProxy.reset();
     m_restProxyShape.reset();
     for (std::size_t i = 0; i < m_bodies.size(); ++i)
@@ -607,7 +600,7 @@ std::string_view toString(GuardTrip::Cause cause) {
 }
 
 Ragdoll::~Ragdoll() {
-    if (m_manager) m_manager->detach(*this);
+    if (m_manager) detail::RagdollWorldLink::detach(*m_manager, *this);
     surface();               // its bodies back in the world, to be removed with the rest
     if (m_multibody) return; // its destructor removes its trees, colliders and constraints
     m_world.removeAction(m_action.get());

@@ -4,8 +4,8 @@
 
 #include <Eigen/Dense>
 
+#include "RagdollWorldLink.h"
 #include "afb/bullet/Ragdoll.h"
-#include "afb/bullet/RagdollWorld.h"
 #include "afb/detail/Convert.h"
 
 namespace afb::bullet {
@@ -66,7 +66,7 @@ void Ragdoll::relayout(const figure::LodLevel* level) {
     };
     const int contactA = bodyOf(contact.a), contactB = bodyOf(contact.b);
 
-    if (m_manager) m_manager->detachBodies(*this);
+    if (m_manager) detail::RagdollWorldLink::detachBodies(*m_manager, *this);
     removeBulletObjects();
     std::vector<std::unique_ptr<btCollisionShape>> compounds; // the old level's shapes live until here
     compounds.swap(m_lodCompounds);
@@ -87,7 +87,7 @@ void Ragdoll::relayout(const figure::LodLevel* level) {
     compounds.clear();
     addConstraints();
     filterPairs();
-    if (m_manager) m_manager->attachBodies(*this);
+    if (m_manager) detail::RagdollWorldLink::attachBodies(*m_manager, *this);
     rememberGoodState();
     if (resting) {
         putToRest();

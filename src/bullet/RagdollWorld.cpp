@@ -15,6 +15,7 @@
 #include "EngineFriction.h"
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
+#include "RagdollWorldLink.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/detail/Constraints.h"
@@ -205,14 +206,15 @@ class RagdollWorld::PositionAction : public btActionInterface {
                 m_owner.m_ragdolls[static_cast<std::size_t>(r)]->wake();
         for (Ragdoll* r : m_toSurface) {
             r->surface();
-            r->m_calmSubsteps = 0;
+            detail::RagdollWorldLink::calmSubsteps(*r) = 0;
         }
         // A frozen ragdoll with nothing active near it for kSinkAfterSubsteps substeps sinks (Ragdoll::sunk).
         for (std::size_t k = 0; k < m_owner.m_ragdolls.size(); ++k) {
             Ragdoll& r = *m_owner.m_ragdolls[k];
             if (!m_owner.m_sinking || !r.frozen() || r.sunk() || r.backend() != Backend::Rigid) continue;
-            if (m_near[k]) r.m_calmSubsteps = 0;
-            else if (++r.m_calmSubsteps >= kSinkAfterSubsteps) r.sink();
+            int& calm = detail::RagdollWorldLink::calmSubsteps(r);
+            if (m_near[k]) calm = 0;
+            else if (++calm >= kSinkAfterSubsteps) detail::RagdollWorldLink::sink(r);
         }
     }
 
@@ -221,7 +223,7 @@ class RagdollWorld::PositionAction : public btActionInterface {
         if (!(o->getCollisionFlags() & btCollisionObject::CF_NO_CONTACT_RESPONSE) || o->getUserPointer() == nullptr)
             return nullptr;
         for (const auto& r : m_owner.m_ragdolls)
-            if (r->m_restProxy.get() == o) return r;
+            if (detail::RagdollWorldLink::sunkBox(*r) == o) return r;
         return nullptr;
     }
 
@@ -543,8 +545,16 @@ Ragdoll* RagdollWorld::ragdollOf(const btCollisionObject* object) const {
     if (object == nullptr) return nullptr;
     if (const BodyOwner* owned = ownerOf(object)) return m_ragdolls[static_cast<std::size_t>(owned->ragdoll)];
     for (Ragdoll* r : m_ragdolls)
-        if (r->m_restProxy.get() == object) return r;
+        if (detail::RagdollWorldLink::sunkBox(*r) == object) return r;
     return nullptr;
+}
+
+std::unique_ptr<Ragdoll> RagdollWorld::spawn(std::shared_ptr<const RagdollAsset> asset, const SpawnOptions& options) {
+    auto ragdoll = std::make_unique<Ragdoll>(std::move(asset), static_cast<btDynamicsWorld&>(m_world), options);
+    detail::RagdollWorldLink::join(*ragdoll, *this);
+    attach(*ragdoll);
+    if (options.startAtRest) ragdoll->putToRest(); // frozen now that this world can wake it
+    return ragdoll;
 }
 
 void RagdollWorld::attach(Ragdoll& r) {

@@ -39,7 +39,7 @@ Scene::~Scene() {
 
 bullet::Ragdoll& Scene::spawn(std::shared_ptr<const bullet::RagdollAsset> asset, bullet::SpawnOptions options) {
     options.method = m_method;
-    m_ragdolls.push_back(std::make_unique<bullet::Ragdoll>(std::move(asset), *m_ragdollWorld, options));
+    m_ragdolls.push_back(m_ragdollWorld->spawn(std::move(asset), options));
     return *m_ragdolls.back();
 }
 

@@ -251,7 +251,7 @@ void spawnBenchmark(benchmark::State& state, const Method& method, const char* l
         const double c0 = threadCpuSeconds();
         if (afb::sim::isRaw(method))
             liveRaw.push_back(std::make_unique<afb::sim::RawRagdoll>(asset, drop.scene.world(), o));
-        else live.push_back(std::make_unique<afb::bullet::Ragdoll>(asset, drop.scene.ragdollWorld(), o));
+        else live.push_back(drop.scene.ragdollWorld().spawn(asset, o));
         spawnCpu += threadCpuSeconds() - c0;
         ++spawned;
         if (live.size() + liveRaw.size() == 16) removeAll();

@@ -363,7 +363,7 @@ TEST_CASE("economy: a sunk ragdoll wakes whole on an impulse and is removed clea
     const int objectsWithFirst = scene.world().getNumCollisionObjects();
     bullet::SpawnOptions o2 = o;
     o2.entityTransform.getOrigin() += btVector3(5, 0, 0);
-    auto second = std::make_unique<bullet::Ragdoll>(asset, scene.ragdollWorld(), o2);
+    auto second = scene.ragdollWorld().spawn(asset, o2);
     for (int s = 0; s < 40; ++s) scene.step(1.0 / 60);
     REQUIRE(second->sunk());
     CHECK(scene.world().getNumCollisionObjects() == objectsWithFirst + 1);

@@ -133,6 +133,9 @@ TEST_CASE("multibody: spawning into a plain btDiscreteDynamicsWorld is the docum
     options.method = multibody();
     CHECK_THROWS_WITH(Ragdoll(asset, plain.world(), options), Catch::Contains("needs a btMultiBodyDynamicsWorld"));
     CHECK(plain.world().getNumCollisionObjects() == 0); // nothing half-added
+    CHECK_THROWS_WITH(plain.ragdollWorld().spawn(asset, options), Catch::Contains("needs a btMultiBodyDynamicsWorld"));
+    CHECK(plain.world().getNumCollisionObjects() == 0);
+    CHECK(plain.world().getNumConstraints() == 0);
     // And a rigid ragdoll works in a multibody world.
     afb::sim::Scene mbWorld(multibody(), {.gravityMps2 = 9.81, .ground = false});
     REQUIRE(dynamic_cast<btMultiBodyDynamicsWorld*>(&mbWorld.world()));

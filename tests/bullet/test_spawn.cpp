@@ -348,6 +348,22 @@ TEST_CASE("bullet: ragdolls of one asset share shapes / destroying one removes i
     w.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60)); // nothing dangling
 }
 
+TEST_CASE("bullet: RagdollWorld::spawn adds a ragdoll the caller owns, and destroying it removes it", "[bullet]") {
+    World w;
+    const auto asset = RagdollAsset::create(chainFigure());
+    const int objects = w.world.getNumCollisionObjects();
+    const int constraints = w.world.getNumConstraints();
+    std::unique_ptr<Ragdoll> ragdoll = w.scene.ragdollWorld().spawn(asset, {.startAtRest = true});
+    REQUIRE(ragdoll);
+    CHECK(w.scene.ragdollWorld().ragdollOf(&ragdoll->collisionObject(0)) == ragdoll.get());
+    CHECK(ragdoll->frozen()); // a spawn at rest is frozen: the RagdollWorld's rest, which a plain world lacks
+    CHECK(w.world.getNumCollisionObjects() == objects + ragdoll->rigidBodyCount());
+    ragdoll.reset();
+    CHECK(w.world.getNumCollisionObjects() == objects);
+    CHECK(w.world.getNumConstraints() == constraints);
+    w.scene.step(1.0 / 60); // the world steps on without it
+}
+
 TEST_CASE("bullet: the world knows every ragdoll body's ragdoll through spawns, removals and LOD switches",
           "[bullet]") {
     // RagdollWorld's owner table (hashed by address): it grows past its first size, renumbers the ragdolls after a
@@ -358,7 +374,7 @@ TEST_CASE("bullet: the world knows every ragdoll body's ragdoll through spawns, 
     auto spawn = [&](int k) {
         SpawnOptions o;
         o.entityTransform.setOrigin(btVector3(btScalar(3 * k), 0, 0));
-        live.push_back(std::make_unique<Ragdoll>(asset, w.scene.ragdollWorld(), o));
+        live.push_back(w.scene.ragdollWorld().spawn(asset, o));
     };
     auto check = [&] {
         for (std::size_t i = 0; i < live.size(); ++i)

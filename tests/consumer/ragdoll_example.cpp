@@ -6,6 +6,7 @@
 // Usage: ragdoll_example [CONTENT_DIR] [ENTITY]   (defaults: . chain)
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include <afb/afb.h>
@@ -40,19 +41,21 @@ int main(int argc, char** argv) {
     const afb::bullet::Method method = *afb::bullet::methodPreset("default");
     afb::bullet::RagdollWorld ragdollWorld(world, method);
 
-    // 3. Two ragdolls from one shared asset; the second one 1 m to the side.
+    // 3. Two ragdolls from one shared asset; the second one 1 m to the side. You own them; destroying one removes
+    // it from the world (here: at the end of main, before ragdollWorld, which was declared first).
     const auto asset = afb::bullet::RagdollAsset::create(figure);
     afb::bullet::SpawnOptions where;
     where.method = method; // its per-ragdoll knobs
     afb::bullet::SpawnOptions second = where;
     second.entityTransform.setOrigin(btVector3(0, 1, 0));
-    afb::bullet::Ragdoll first(asset, ragdollWorld, where), other(asset, ragdollWorld, second);
+    const std::unique_ptr<afb::bullet::Ragdoll> first = ragdollWorld.spawn(asset, where);
+    const std::unique_ptr<afb::bullet::Ragdoll> other = ragdollWorld.spawn(asset, second);
 
     // 4. Step (the method's substeps inside), then read the skeleton back.
     for (int i = 0; i < 120; ++i) ragdollWorld.step(1.0 / 60.0);
-    const afb::pose::SkeletonPose pose = afb::pose::driveSkeleton(figure, first.bodyTransforms());
+    const afb::pose::SkeletonPose pose = afb::pose::driveSkeleton(figure, first->bodyTransforms());
     const auto joints = pose.world();
-    std::printf("%s: %d bodies, %d joints after 2 s (world, metres)\n", figure.name.c_str(), first.bodyCount(),
+    std::printf("%s: %d bodies, %d joints after 2 s (world, metres)\n", figure.name.c_str(), first->bodyCount(),
                 figure.skeleton.jointCount());
     for (int j = 0; j < figure.skeleton.jointCount(); ++j) {
         const Eigen::Vector3d& p = joints[static_cast<std::size_t>(j)].position;

@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
             ++(trip.cause == afb::bullet::GuardTrip::Cause::NonFinite ? n.nonFiniteTrips : n.otherTrips);
         };
         const auto& asset = assets[static_cast<std::size_t>(rng() % assets.size())];
-        l.ragdoll = std::make_unique<Ragdoll>(asset, scene.ragdollWorld(), so);
+        l.ragdoll = scene.ragdollWorld().spawn(asset, so);
         l.stepsLeft = 10 + static_cast<int>(rng() % 50);
         l.hitAt = chance(0.1) ? static_cast<int>(rng() % static_cast<unsigned>(l.stepsLeft)) : -1;
         l.poisonAt = chance(0.02) ? static_cast<int>(rng() % static_cast<unsigned>(l.stepsLeft)) : -1;

@@ -22,6 +22,7 @@ class RagdollWorld;
 namespace detail {
 class MultibodyRagdoll;
 class ObjectArena;
+class RagdollWorldLink;
 } // namespace detail
 
 /// Restitution of every AF body (docs/format.md §3.4: the engine's fixed value; it applies it above 2 units/s only).
@@ -122,6 +123,10 @@ inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Me
 /// A figure's bodies and constraints added to a caller-owned world; the destructor removes them again. Shapes
 /// are the asset's, shared with every other ragdoll of it. Not copyable; one world, one thread.
 ///
+/// A game spawns ragdolls through its RagdollWorld (RagdollWorld::spawn, which returns a std::unique_ptr<Ragdoll>)
+/// and removes one by destroying it; it must not outlive that RagdollWorld. The constructor spawns into a plain
+/// btDynamicsWorld instead, without the world-level half of the method.
+///
 /// The backend is the method's (SpawnOptions::method.backend), chosen here once: Backend::Rigid builds one
 /// btRigidBody per body and btTypedConstraints; Backend::Multibody builds btMultiBody trees (reduced coordinates:
 /// tree joints cannot separate) and needs a btMultiBodyDynamicsWorld (with a btMultiBodyConstraintSolver): spawned
@@ -135,11 +140,10 @@ inline SpawnOptions spawnOptionsFor(const figure::LoadedFigure& loaded, const Me
 class Ragdoll {
   public:
     /// Spawns into a plain world: the method's per-ragdoll knobs apply, the world keeps its own settings and
-    /// there is no position pass.
+    /// there is no position pass, no frozen rest. `world` must outlive the ragdoll. Into a world a RagdollWorld
+    /// manages, spawn with RagdollWorld::spawn.
     Ragdoll(std::shared_ptr<const RagdollAsset> asset, btDynamicsWorld& world, const SpawnOptions& options = {});
-    /// Spawns into a world managed by `world` (its method's world-level knobs, position pass, contact friction);
-    /// `world` must outlive the ragdoll.
-    Ragdoll(std::shared_ptr<const RagdollAsset> asset, RagdollWorld& world, const SpawnOptions& options = {});
+    /// Removes the ragdoll's bodies and constraints from its world (and from its RagdollWorld's bookkeeping).
     ~Ragdoll();
     Ragdoll(const Ragdoll&) = delete;
     Ragdoll& operator=(const Ragdoll&) = delete;
@@ -333,7 +337,8 @@ class Ragdoll {
     void filterPairs();
     void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
-    friend class RagdollWorld;
+    // What the RagdollWorld that spawned it reaches (spawn, sinking): src/bullet/RagdollWorldLink.h, the one way in.
+    friend class detail::RagdollWorldLink;
     void sink(); ///< frozen → out of the world behind one box (sunk())
 
     void requireRigid(const char* accessor) const; ///< throws std::logic_error for a multibody ragdoll

@@ -1,7 +1,7 @@
 #pragma once
 // The world-level half of a Method, installed into a caller-owned btDiscreteDynamicsWorld for as long as this
 // guard lives: solver settings, the engine's contact friction and the position pass over every ragdoll that
-// was spawned through it. Create it before the ragdolls and destroy it after them.
+// was spawned through it (RagdollWorld::spawn). Create it before the ragdolls and destroy it after them.
 #include <memory>
 #include <utility>
 #include <vector>
@@ -9,10 +9,14 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollAsset.h"
 
 namespace afb::bullet {
 
-class Ragdoll;
+namespace detail {
+class RagdollWorldLink;
+} // namespace detail
 
 /// The engine's friction combination (docs/format.md §4.8) through Bullet's one process-wide contact-added callback:
 /// ragdoll bodies spawned with SpawnOptions::engineContactFriction then combine friction as the engine does.
@@ -46,8 +50,11 @@ class EngineContactFriction {
 Method methodInForce(const Method& method, bool ragdollSolver);
 
 /// A caller's world with a Method's world-level knobs (substeps, iterations, split impulse, ERPs, warm starting,
-/// position iterations) and the engine's contact friction. Ragdolls spawned with `Ragdoll(asset, ragdollWorld,
-/// options)` get the position pass. Not copyable; one world, one thread.
+/// position iterations) and the engine's contact friction, and the place ragdolls are spawned: spawn() adds one,
+/// destroying what it returned removes it. Not copyable; one world, one thread.
+///
+/// Lifetimes nest: the btDiscreteDynamicsWorld outlives the RagdollWorld, which outlives every Ragdoll it spawned.
+/// Declare the RagdollWorld before the ragdolls (or clear the container that holds them before destroying it).
 class RagdollWorld {
   public:
     /// Installs `method`'s world-level knobs into `world` (applyWorldKnobs) and the engine's contact friction;
@@ -58,6 +65,16 @@ class RagdollWorld {
     ~RagdollWorld();
     RagdollWorld(const RagdollWorld&) = delete;
     RagdollWorld& operator=(const RagdollWorld&) = delete;
+
+    /// Spawns a ragdoll of `asset` into the world: its bodies and constraints join it now, built with the
+    /// per-ragdoll knobs of `options.method` (the world-level ones are this world's method()), and it gets the
+    /// position pass, the contact handling and frozen rest of this world. The caller owns the ragdoll: destroying
+    /// it (`ragdoll.reset()`, or the end of its scope or container) removes it from the world, between steps (not
+    /// from inside one, as from ExplosionGuard::onTrip). It must not outlive this RagdollWorld. Throws
+    /// std::invalid_argument when `options.method` is the multibody backend and the world is not a
+    /// btMultiBodyDynamicsWorld (makeWorld makes one that is), and then adds nothing.
+    [[nodiscard]] std::unique_ptr<Ragdoll> spawn(std::shared_ptr<const RagdollAsset> asset,
+                                                 const SpawnOptions& options = {});
 
     /// The caller's world this one manages.
     btDiscreteDynamicsWorld& world() { return m_world; }
@@ -95,10 +112,10 @@ class RagdollWorld {
     Ragdoll* ragdollOf(const btCollisionObject* object) const;
 
   private:
-    // A ragdoll registers itself (its constructor and destructor), and tells of a guard's restore and of a level of
-    // detail's new Bullet objects.
-    friend class Ragdoll;
-    // Ragdolls register themselves here (Ragdoll's constructor and destructor).
+    // What a ragdoll tells the world it was spawned through (its destructor, a guard's restore, a level of detail's
+    // new Bullet objects, a sunk ragdoll's box destroyed): src/bullet/RagdollWorldLink.h, the one way in.
+    friend class detail::RagdollWorldLink;
+    // A ragdoll joins the world (spawn).
     void attach(Ragdoll& ragdoll);
     // Unregisters a ragdoll (its destructor).
     void detach(Ragdoll& ragdoll);
