@@ -111,46 +111,48 @@ void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody
     }
 }
 
-double RagdollSolver::Direct::resolve(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool) {
-    btSolverConstraint& c = *fr.c;
-    if (!fr.pending && fr.invEffectiveMass == 0) return 0;
-    const double target = (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
-    const double toGo = target - rowVelocity(bodyPool, c);
-    if (fr.pending) {
-        if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit))) return 0;
-        complete(fr, bodyPool);
-        if (fr.invEffectiveMass == 0) return 0;
-    }
-    double dl = toGo * fr.invEffectiveMass;
-    const double sum = double(c.m_appliedImpulse) + dl;
-    if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
-    else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
-    if (dl == 0) return 0;
-    c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
-    apply(fr, bodyPool, dl);
-    return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
-}
-
 double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& bodyPool,
                                             btAlignedObjectArray<btSolverConstraint>& contactPool,
                                             btAlignedObjectArray<btSolverConstraint>& rollingPool,
                                             btSingleConstraintRowSolver rolling, int iteration, bool contacts) {
     // In block mode the rows through the groups are the block's; the others are taken here.
     auto inTurn = [this](const FreeRow& fr) { return figureIterations == 0 || (fr.group[0] < 0 && fr.group[1] < 0); };
+    // One row: Bullet's update with the row's effective mass (through the groups it moves) and its response.
+    // Returns the row's residual term, dl² / invEffectiveMass² (0: no change).
+    auto resolve = [this, &bodyPool](FreeRow& fr) -> double {
+        btSolverConstraint& c = *fr.c;
+        if (!fr.pending && fr.invEffectiveMass == 0) return 0;
+        const double target =
+            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
+        const double toGo = target - rowVelocity(bodyPool, c);
+        if (fr.pending) {
+            if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
+                return 0;
+            complete(fr, bodyPool);
+            if (fr.invEffectiveMass == 0) return 0;
+        }
+        double dl = toGo * fr.invEffectiveMass;
+        const double sum = double(c.m_appliedImpulse) + dl;
+        if (sum < double(c.m_lowerLimit)) dl = double(c.m_lowerLimit) - double(c.m_appliedImpulse);
+        else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
+        if (dl == 0) return 0;
+        c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
+        apply(fr, bodyPool, dl);
+        return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
+    };
     double residual = 0;
     for (FreeRow& fr : nonContact)
-        if (iteration < fr.c->m_overrideNumSolverIterations && inTurn(fr))
-            residual = std::max(residual, resolve(fr, bodyPool));
+        if (iteration < fr.c->m_overrideNumSolverIterations && inTurn(fr)) residual = std::max(residual, resolve(fr));
     if (!contacts) return residual;
     for (FreeRow& fr : contact)
-        if (inTurn(fr)) residual = std::max(residual, resolve(fr, bodyPool));
+        if (inTurn(fr)) residual = std::max(residual, resolve(fr));
     for (FreeRow& fr : friction) {
         if (!inTurn(fr)) continue;
         const btScalar total = contactPool[fr.c->m_frictionIndex].m_appliedImpulse;
         if (total <= 0) continue;
         fr.c->m_lowerLimit = -(fr.c->m_friction * total);
         fr.c->m_upperLimit = fr.c->m_friction * total;
-        residual = std::max(residual, resolve(fr, bodyPool));
+        residual = std::max(residual, resolve(fr));
     }
     for (int j = 0; j < rollingPool.size(); ++j) {
         btSolverConstraint& c = rollingPool[j];

@@ -136,12 +136,11 @@ struct RagdollSolver::Direct {
                          btAlignedObjectArray<btSolverConstraint>& frictionPool);
     void prepareColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
     void denseColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
-    // The iterations' parts (DirectIterations.cpp): the exact joint solve of every group (its residual); one free
-    // row's update (its residual) and the application of an impulse dl to it; the rows through the groups as one
+    // The iterations' parts (DirectIterations.cpp): the exact joint solve of every group (its residual); the
+    // application of an impulse dl to a free row; the rows through the groups as one
     // block, `figureSweeps` sweeps over their couplings (FigureBlock.cpp); each returns its largest residual.
     double solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
                        const btAlignedObjectArray<btSolverConstraint>& pool);
-    double resolve(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool);
     void apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl);
     double solveFigureBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
     // The free rows taken one at a time in an iteration (all of them, or in block mode those outside the block).
