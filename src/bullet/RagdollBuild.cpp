@@ -1,0 +1,271 @@
+// Building a ragdoll's Bullet bodies and constraints from its figure: docs/format.md §4 (constraint mapping),
+// §4.7 (springs), §4.8 (friction), §6.2 (collision filtering).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
+
+#include "EngineFriction.h"
+#include "Multibody.h"
+#include "ObjectArena.h"
+#include "RagdollAction.h"
+#include "RagdollWorldLink.h"
+#include "afb/bullet/Ragdoll.h"
+#include "afb/detail/Constraints.h"
+#include "afb/detail/Convert.h"
+#include "afb/figure/Collision.h"
+
+namespace afb::bullet {
+
+using figure::FigureConstraint;
+using figure::JointType;
+
+namespace {
+
+// A btRigidBody whose list of bodies it does not collide with (btCollisionObject::setIgnoreCollisionCheck) can be
+// sized before it is filled: filterPairs adds up to a dozen entries per body, each growing the array otherwise.
+class FigureRigidBody : public btRigidBody {
+  public:
+    using btRigidBody::btRigidBody;
+    void reserveIgnored(int count) { m_objectsWithoutCollisionCheck.reserve(count); }
+};
+
+thread_local std::vector<int> t_ignoredCount; // filterPairs' scratch
+
+} // namespace
+
+void Ragdoll::addBodies() {
+    const figure::Figure& f = figure();
+    m_bodies.reserve(m_layout->rigids.size());
+    m_masks.reserve(m_layout->rigids.size());
+    for (const RigidLayout::Rigid& r : m_layout->rigids) {
+        // A merged rigid takes its heaviest body's surface and damping (the engine gives one body one value).
+        const figure::FigureBody& b = f.bodies[static_cast<std::size_t>(r.representative)];
+        btRigidBody::btRigidBodyConstructionInfo info(static_cast<btScalar>(r.massKg), nullptr, r.shape,
+                                                      toBt(r.inertiaKgM2));
+        info.m_startWorldTransform = m_lodLayout ? toBt(r.loadPose) : m_spawn * toBt(r.loadPose); // see loadPose
+        info.m_friction = static_cast<btScalar>(b.contactFriction);
+        info.m_restitution = static_cast<btScalar>(kBodyRestitution);
+        info.m_linearDamping = static_cast<btScalar>(b.linearDamping);
+        info.m_angularDamping = static_cast<btScalar>(b.angularDamping);
+        FigureRigidBody* body = m_arena->make<FigureRigidBody>(info);
+        body->setSleepingThresholds(0, 0); // rest is decided by the figure's own rules (§6.1), not Bullet's
+        if (m_method.ccd == CcdPolicy::FastBodies) {
+            // A body that moves more than its inner radius in a step is swept as a sphere of that radius, so a
+            // fast thin limb cannot pass into or through the ground between two steps.
+            const btScalar radius = static_cast<btScalar>(r.innerRadius);
+            body->setCcdMotionThreshold(radius);
+            body->setCcdSweptSphereRadius(radius);
+        }
+        int mask = m_spawnMask;
+        bool tests = false;
+        for (const int i : r.bodies) {
+            if (figure::attachedToWorld(f, i)) mask &= ~btBroadphaseProxy::StaticFilter;
+            tests = tests || f.bodies[static_cast<std::size_t>(i)].clipMask != 0;
+        }
+        if (!tests) mask = 0; // §6.2: a body with clipMask 0 does no collision tests
+        if (m_engineFriction) {
+            body->setUserIndex2(kEngineFrictionMarker);
+            body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+        }
+        m_world.addRigidBody(body, m_group, mask);
+        m_bodies.push_back(body);
+        m_masks.push_back(mask);
+    }
+}
+
+btRigidBody& Ragdoll::other(int body2) const {
+    return body2 >= 0 ? *m_bodies[static_cast<std::size_t>(rigidIndexOf(body2))] : btTypedConstraint::getFixedBody();
+}
+
+// Body2's frame: body-local, or world for a world constraint (model space moved by the spawn transform).
+btTransform Ragdoll::frameOfBody2(const FigureConstraint& c) const {
+    return c.body2 >= 0 ? toBt(c.frameInBody2) : m_spawn * toBt(c.frameInBody2);
+}
+
+std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const {
+    if (m_multibody) return m_multibody->constraintFramesWorld(i);
+    const figure::FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
+    const auto& rigidFrames = m_rigidFrames[static_cast<std::size_t>(i)];
+    const btTransform a = body(c.body1).getCenterOfMassTransform() * rigidFrames.first;
+    const btTransform b =
+        c.body2 >= 0 ? body(c.body2).getCenterOfMassTransform() * rigidFrames.second : rigidFrames.second;
+    return {a, b};
+}
+
+void Ragdoll::addConstraints() {
+    const figure::Figure& f = figure();
+    detail::ObjectArena& arena = *m_arena;
+    const int iterations = m_method.jointIterations;
+    const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
+    // At most a main constraint, its friction and a limit per joint.
+    m_frames.reserve(f.constraints.size());
+    m_rigidFrames.reserve(f.constraints.size());
+    m_main.reserve(f.constraints.size());
+    m_constraints.reserve(3 * f.constraints.size());
+    m_limitRows.reserve(3 * f.constraints.size());
+    const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
+    for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
+        const FigureConstraint& c = f.constraints[ci];
+        btRigidBody& a = body(c.body1);
+        btRigidBody& b = other(c.body2);
+        m_frames.emplace_back(toBt(c.frameInBody1), frameOfBody2(c));
+        // The frames in the rigid bodies' frames (a merged body sits at an offset in its rigid).
+        const btTransform& offsetA = bodyInRigid(c.body1);
+        const btTransform fa = offsetA * m_frames.back().first;
+        const btTransform fb = c.body2 >= 0 ? bodyInRigid(c.body2) * m_frames.back().second : m_frames.back().second;
+        m_rigidFrames.emplace_back(fa, fb);
+        if (m_layout->internal[ci]) { // both bodies in one rigid: the joint holds by construction
+            m_main.push_back(nullptr);
+            continue;
+        }
+        // Directions fixed in body1 and in body2 as Bullet sees the rigid bodies' frames (world for the world).
+        const btMatrix3x3& b1Rot = offsetA.getBasis();
+        const btMatrix3x3 b2Rot = c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis();
+        btTypedConstraint* main = nullptr;
+        btTypedConstraint* limit = nullptr;
+        btMatrix3x3 frictionAxes = fb.getBasis();
+        int frictionRows = 0;
+
+        switch (c.type) {
+        case JointType::Fixed: main = arena.make<btFixedConstraint>(a, b, fa, fb); break;
+        case JointType::BallAndSocket:
+            frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
+            frictionRows = 3;
+            if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
+                // btConeTwistConstraint: twist about X is free (span < 0), swing keeps the X axes within the
+                // half-angle: frame B's X is the cone axis (body2), frame A's X the shaft (body1), and frame A
+                // is frame B turned along the shortest arc, so the twist starts at 0.
+                const btVector3 axisB = b2Rot * toBt(cone->axisInBody2);
+                const btVector3 shaftA = b1Rot * toBt(cone->shaftInBody1);
+                const btMatrix3x3 frameBRot = basisWithX(axisB);
+                const btTransform bWorld = b.getCenterOfMassTransform();
+                const btTransform aWorld = a.getCenterOfMassTransform();
+                const btVector3 axisW = bWorld.getBasis() * axisB, shaftW = aWorld.getBasis() * shaftA;
+                const btMatrix3x3 frameAWorld = shortestArc(axisW, shaftW) * (bWorld.getBasis() * frameBRot);
+                const btTransform frameA(aWorld.getBasis().transpose() * frameAWorld, fa.getOrigin());
+                const btTransform frameB(frameBRot, fb.getOrigin());
+                const btScalar h = static_cast<btScalar>(cone->halfAngleRad);
+                if (policy.speculative) {
+                    // Our own cone row (speculative); the anchor alone is a point-to-point.
+                    main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+                    limit = arena.make<DirectionLimitConstraint>(a, b, shaftA, frameBRot, LimitShape::Cone, h,
+                                                                 btScalar(0), policy);
+                } else {
+                    auto* ct = arena.make<btConeTwistConstraint>(a, b, frameA, frameB);
+                    ct->setLimit(h, h, btScalar(-1), btScalar(1), policy.errorReduction, btScalar(1));
+                    main = ct;
+                }
+            } else {
+                main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
+            }
+            break;
+        case JointType::Universal: {
+            // No relative spin about the shafts (homokinetic, §4.4), swing free: our constant-velocity constraint
+            // (Method::constantVelocityUniversal), or cone-twist with twist locked; frames' X axes are shaft 1
+            // (body1) and −shaft 2 (body2), aligned at the load pose.
+            if (m_method.constantVelocityUniversal) main = arena.make<UniversalConstraint>(a, b, fa, fb);
+            else {
+                auto* ct = arena.make<btConeTwistConstraint>(a, b, fa, fb);
+                ct->setLimit(SIMD_PI, SIMD_PI, 0);
+                main = ct;
+            }
+            frictionRows = 2;
+            frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2],
+                                  0, fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
+            break;
+        }
+        case JointType::Hinge: {
+            auto* h = arena.make<btHingeConstraint>(a, b, fa, fb, false);
+            if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
+                const btScalar lo = static_cast<btScalar>(range->lowerRad), hi = static_cast<btScalar>(range->upperRad);
+                if (policy.speculative) limit = arena.make<HingeRangeConstraint>(a, b, fa, fb, lo, hi, policy);
+                else h->setLimit(lo, hi, 1, policy.errorReduction, 1);
+            }
+            main = h;
+            frictionRows = 1;
+            frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
+            break;
+        }
+        case JointType::Slider: main = arena.adopt(makeSlider(a, b, fa, fb)); break;
+        case JointType::Spring: {
+            const SpringConstraint::Params p = SpringConstraint::Params::of(c.spring);
+            main = arena.make<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
+            break;
+        }
+        }
+
+        // Pyramid limits (ball) and every universal limit: our direction-limit rows.
+        if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
+            if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
+                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(p->shaftInBody1),
+                                                             b2Rot * toBt(p->basisInBody2),
+                                                             DirectionLimitConstraint::Shape::Pyramid,
+                                                             static_cast<btScalar>(p->halfAngle1Rad),
+                                                             static_cast<btScalar>(p->halfAngle2Rad), policy);
+            const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
+            if (cone && c.type == JointType::Universal)
+                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(cone->shaftInBody1),
+                                                             basisWithX(b2Rot * toBt(cone->axisInBody2)),
+                                                             DirectionLimitConstraint::Shape::Cone,
+                                                             static_cast<btScalar>(cone->halfAngleRad), btScalar(0),
+                                                             policy);
+        }
+
+        m_main.push_back(main);
+        if (iterations > 0) {
+            if (main) main->setOverrideNumSolverIterations(iterations);
+            if (limit) limit->setOverrideNumSolverIterations(iterations);
+        }
+        if (main) {
+            // Collision between the joint's bodies is off through filterPairs (RigidLayout::ignoredPairs has every
+            // pair a joint disables, §6.2), not through Bullet's constraint references, which would add the same
+            // entry to each body's list again, with a linear search per constraint and body, at every spawn.
+            m_world.addConstraint(main);
+            if (c.friction > 0 && frictionRows > 0) {
+                auto* fb2 = arena.make<btJointFeedback>();
+                main->setJointFeedback(fb2);
+                auto* fr = arena.make<JointFrictionConstraint>(a, b, frictionAxes, frictionRows);
+                m_action->frictions.push_back({fr, fb2, static_cast<btScalar>(c.friction) * lever});
+                m_feedback.push_back(fb2);
+                m_constraints.push_back(main);
+                m_world.addConstraint(fr);
+                m_constraints.push_back(fr);
+            } else {
+                m_constraints.push_back(main);
+            }
+        }
+        m_limitRows.resize(m_constraints.size(), false);
+        if (limit) {
+            m_world.addConstraint(limit);
+            m_constraints.push_back(limit);
+            m_limitRows.push_back(true);
+        }
+    }
+}
+
+// §6.2: every pair of the ragdoll's bodies that does not test contact (RigidLayout::ignoredPairs, computed once per
+// figure): the pairs the figure's rules keep apart, those a joint disables among them (Bullet's own constraint
+// references are not used for it, see addConstraints), the pairs its joints keep apart anyway
+// (RagdollAsset::prunedPairs), and under Method::exemptOverlapping the pairs that overlap at the load pose.
+void Ragdoll::filterPairs() {
+    const std::vector<std::pair<int, int>>& ignored =
+        m_method.exemptOverlapping ? m_layout->ignoredPairsApart : m_layout->ignoredPairs;
+    std::vector<int>& count = t_ignoredCount;
+    count.assign(m_bodies.size(), 0);
+    for (const auto& [i, j] : ignored) {
+        ++count[static_cast<std::size_t>(i)];
+        ++count[static_cast<std::size_t>(j)];
+    }
+    for (std::size_t i = 0; i < m_bodies.size(); ++i)
+        static_cast<FigureRigidBody&>(*m_bodies[i]).reserveIgnored(count[i]);
+    for (const auto& [i, j] : ignored) {
+        btRigidBody& a = *m_bodies[static_cast<std::size_t>(i)];
+        btRigidBody& b = *m_bodies[static_cast<std::size_t>(j)];
+        a.setIgnoreCollisionCheck(&b, true);
+        b.setIgnoreCollisionCheck(&a, true);
+    }
+}
+
+} // namespace afb::bullet
