@@ -204,6 +204,7 @@ struct RagdollSolver::Direct {
         void clear(std::size_t groups) {
             rows.clear();
             plainDynamic.clear();
+            seen.clear(); // join() marks with row indices, which the next step reuses
             if (ofGroup.size() < groups) ofGroup.resize(groups);
             for (std::size_t g = 0; g < groups; ++g) ofGroup[g].clear();
         }
