@@ -16,15 +16,6 @@ using direct::sideB;
 using direct::SideJ;
 using direct::Vec;
 
-namespace {
-
-double rowVelocity(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
-    return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(bodyPool[c.m_solverBodyIdA],
-                                                                      bodyPool[c.m_solverBodyIdB], c));
-}
-
-} // namespace
-
 double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
                                           const btAlignedObjectArray<btSolverConstraint>& pool) {
     double residual = 0;
@@ -35,7 +26,7 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
         double largest = residual; // kept in a register over the rows
         for (Eigen::Index i = 0; i < n; ++i) {
             const btSolverConstraint& c = pool[group.rows[static_cast<std::size_t>(i)].pool];
-            err(i) = group.target(i) - group.cfm(i) * group.lambda(i) - rowVelocity(bodyPool, c);
+            err(i) = group.target(i) - group.cfm(i) * group.lambda(i) - direct::rowVelocity(bodyPool, c);
             largest = std::max(largest, err(i) * err(i));
         }
         residual = largest;
@@ -122,9 +113,7 @@ double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& 
     auto resolve = [this, &bodyPool](FreeRow& fr) -> double {
         btSolverConstraint& c = *fr.c;
         if (!fr.pending && fr.invEffectiveMass == 0) return 0;
-        const double target =
-            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
-        const double toGo = target - rowVelocity(bodyPool, c);
+        const double toGo = direct::velocityToGo(bodyPool, c);
         if (fr.pending) {
             if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
                 return 0;

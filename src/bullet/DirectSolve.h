@@ -13,6 +13,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "BlockTree.h"
+#include "RowKernels.h"
 #include "afb/bullet/RagdollSolver.h"
 
 namespace afb::bullet {
@@ -61,6 +62,18 @@ inline void addScaled(btVector3& v, const btVector3& u, btScalar s) {
 
 inline double dot(const SideJ& row, const SideJ& other) { // J_row · M⁻¹ J_otherᵀ at a shared body
     return double(row.lin.dot(other.linInv)) + double(row.ang.dot(other.angInv));
+}
+
+// J v of a row over its two bodies' velocities (as Bullet's row update reads them).
+inline double rowVelocity(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
+    return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(bodyPool[c.m_solverBodyIdA],
+                                                                      bodyPool[c.m_solverBodyIdB], c));
+}
+
+// The velocity a row still asks for: its target (rhs less its cfm's share of the impulse so far) less J v.
+inline double velocityToGo(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
+    const double target = (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
+    return target - rowVelocity(bodyPool, c);
 }
 
 } // namespace direct

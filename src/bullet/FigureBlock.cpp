@@ -16,15 +16,6 @@ using direct::sideA;
 using direct::sideB;
 using direct::SideJ;
 
-namespace {
-
-double rowVelocity(const btAlignedObjectArray<btSolverBody>& bodyPool, const btSolverConstraint& c) {
-    return double(detail::rowVelocitySum<detail::RowTarget::Velocity>(bodyPool[c.m_solverBodyIdA],
-                                                                      bodyPool[c.m_solverBodyIdB], c));
-}
-
-} // namespace
-
 double RagdollSolver::Direct::couplingOf(const FreeRow& r, const FreeRow& s,
                                          const btAlignedObjectArray<btSolverBody>& bodyPool) const {
     const btSolverConstraint& cr = *r.c;
@@ -98,9 +89,7 @@ void RagdollSolver::Direct::gatherBlock(btAlignedObjectArray<btSolverBody>& body
         if (fr.group[0] < 0 && fr.group[1] < 0) return;
         btSolverConstraint& c = *fr.c;
         if (!fr.pending && fr.invEffectiveMass == 0) return;
-        const double target =
-            (double(c.m_rhs) - double(c.m_cfm) * double(c.m_appliedImpulse)) / double(c.m_jacDiagABInv);
-        const double toGo = target - rowVelocity(bodyPool, c);
+        const double toGo = direct::velocityToGo(bodyPool, c);
         if (fr.pending) {
             if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
                 return;
