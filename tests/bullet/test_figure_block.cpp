@@ -9,6 +9,7 @@
 
 #include "EntityFixture.h"
 #include "FigureFixture.h"
+#include "LyingHumanoid.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
@@ -93,30 +94,11 @@ TEST_CASE("figure block: each iteration ends with the joints held, so a humanoid
     // while the figure lies still. Rows in turn end each iteration with the contact friction rows, which disturb
     // the joints (0.18° and more: the friction-through-the-figure test). Block mode solves the friction rows
     // first, then the joints, then the block, whose responses move the figure as its joints let it.
-    const auto loaded = afb::test::loadEntity("humanoid");
-    const auto asset = RagdollAsset::create(loaded.figure);
-    const afb::figure::Figure& fig = loaded.figure;
     Method m = *afb::bullet::methodPreset("default");
     m.positionIterations = 0;
     m.positionTree = 0;
     m.figureIterations = 4;
-    afb::sim::Scene scene(m);
-    afb::bullet::SpawnOptions o;
-    o.comeToRest = false;
-    o.entityTransform = btTransform(btQuaternion(btVector3(0, 1, 0), btScalar(-90 * kDeg)), btVector3(0, 0, 0.3f));
-    Ragdoll& r = scene.spawn(asset, o);
-    double worst = 0;
-    for (int s = 0; s < 360; ++s) {
-        scene.step(1.0 / 60);
-        if (s < 120) continue;
-        const std::vector<afb::figure::Transform> t = r.bodyTransforms();
-        for (const afb::figure::FigureConstraint& c : fig.constraints) {
-            if (c.type != afb::figure::JointType::Hinge || c.body2 < 0) continue;
-            const Eigen::Vector3d a1 = (t[static_cast<std::size_t>(c.body1)] * c.frameInBody1).rotation.col(2);
-            const Eigen::Vector3d a2 = (t[static_cast<std::size_t>(c.body2)] * c.frameInBody2).rotation.col(2);
-            worst = std::max(worst, std::atan2(a1.cross(a2).norm(), a1.dot(a2)));
-        }
-    }
+    const double worst = afb::test::lyingHumanoidHingeAxesApart(m);
     INFO("hinge axes apart: " << worst / kDeg << " deg");
     CHECK(worst < 0.12 * kDeg);
 }

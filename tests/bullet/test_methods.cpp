@@ -11,6 +11,7 @@
 
 #include "EntityFixture.h"
 #include "FigureFixture.h"
+#include "LyingHumanoid.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
@@ -976,33 +977,12 @@ TEST_CASE("friction through the figure: a humanoid lying still keeps its hinges'
     // Method::frictionThroughFigure the friction rows move the figure as its joints let it and the solve ends with
     // the joints held. Without the position pass, what the velocities leave shows as hinges whose two axes part
     // while the figure lies still (Bullet's joint ERP alone pulls them back).
-    const auto loaded = afb::test::loadEntity("humanoid");
-    const auto asset = RagdollAsset::create(loaded.figure);
-    const afb::figure::Figure& fig = loaded.figure;
-    // The largest angle between a hinge's axis in its two bodies over the 4 s after 2 s on the ground.
-    auto worstHingeAxes = [&](bool through) {
+    auto worstHingeAxes = [](bool through) {
         Method m = *afb::bullet::methodPreset("default");
         m.positionIterations = 0;
         m.positionTree = 0;
         m.frictionThroughFigure = through;
-        afb::sim::Scene scene(m);
-        afb::bullet::SpawnOptions o;
-        o.comeToRest = false;
-        o.entityTransform = btTransform(btQuaternion(btVector3(0, 1, 0), btScalar(-90 * kDeg)), btVector3(0, 0, 0.3f));
-        Ragdoll& r = scene.spawn(asset, o);
-        double worst = 0;
-        for (int s = 0; s < 360; ++s) {
-            scene.step(1.0 / 60);
-            if (s < 120) continue;
-            const std::vector<afb::figure::Transform> t = r.bodyTransforms();
-            for (const afb::figure::FigureConstraint& c : fig.constraints) {
-                if (c.type != afb::figure::JointType::Hinge || c.body2 < 0) continue;
-                const Eigen::Vector3d a1 = (t[static_cast<std::size_t>(c.body1)] * c.frameInBody1).rotation.col(2);
-                const Eigen::Vector3d a2 = (t[static_cast<std::size_t>(c.body2)] * c.frameInBody2).rotation.col(2);
-                worst = std::max(worst, std::atan2(a1.cross(a2).norm(), a1.dot(a2)));
-            }
-        }
-        return worst;
+        return afb::test::lyingHumanoidHingeAxesApart(m);
     };
     const double oneBody = worstHingeAxes(false), through = worstHingeAxes(true);
     INFO("hinge axes apart: one-body friction " << oneBody / kDeg << " deg, through the figure " << through / kDeg
