@@ -9,11 +9,6 @@
 namespace afb::bullet {
 
 using direct::addScaled;
-using direct::dot;
-using direct::Mat;
-using direct::sideA;
-using direct::sideB;
-using direct::SideJ;
 using direct::Vec;
 
 double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,

@@ -13,13 +13,11 @@ namespace {
 constexpr btScalar unbounded = btScalar(1e30); // Bullet's bound of an unbounded row
 } // namespace
 
-using direct::addScaled;
 using direct::dot;
 using direct::Mat;
 using direct::sideA;
 using direct::sideB;
 using direct::SideJ;
-using direct::Vec;
 
 // The group's tree: a node per body and per jointed body pair, rooted at the joint to the world if there is one.
 // False when the rows do not form one tree (a loop, more than one joint to the world).

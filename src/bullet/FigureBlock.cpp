@@ -60,7 +60,6 @@ void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolve
     for (int t = 0; t < 2; ++t)
         if (fr.group[t] >= 0)
             for (const int j : block.ofGroup[static_cast<std::size_t>(fr.group[t])]) link(j);
-    const btSolverConstraint& c = *fr.c;
     auto plainDynamic = [&](const FreeRow& row, int t) {
         const int id = t ? row.c->m_solverBodyIdB : row.c->m_solverBodyIdA;
         return row.group[t] < 0 && dynamicBody(bodyPool[id]) ? id : -1;
@@ -80,30 +79,27 @@ void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolve
     for (int t = 0; t < 2; ++t)
         if (fr.group[t] >= 0 && !(t == 1 && fr.group[0] == fr.group[1]))
             block.ofGroup[static_cast<std::size_t>(fr.group[t])].push_back(k);
-    (void)c;
+    block.toGo.resize(block.rows.size());
 }
 
 void RagdollSolver::Direct::gatherBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts) {
     block.taken.clear();
+    // Takes the row into this iteration's block when it would move (or has moved); false when it stays out.
     auto consider = [&](FreeRow& fr) {
-        if (fr.group[0] < 0 && fr.group[1] < 0) return;
+        if (fr.group[0] < 0 && fr.group[1] < 0) return false;
         btSolverConstraint& c = *fr.c;
-        if (!fr.pending && fr.invEffectiveMass == 0) return;
+        if (!fr.pending && fr.invEffectiveMass == 0) return false;
         const double toGo = direct::velocityToGo(bodyPool, c);
         if (fr.pending) {
             if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
-                return;
+                return false;
             complete(fr, bodyPool);
-            if (fr.invEffectiveMass == 0) return;
+            if (fr.invEffectiveMass == 0) return false;
         }
         if (fr.blockIndex < 0) join(fr, bodyPool);
-        if (&fr >= friction.data() && &fr < friction.data() + friction.size()) {
-            FreeRow& normal = contact[static_cast<std::size_t>(fr.c->m_frictionIndex)];
-            fr.normal = normal.blockIndex;
-        }
         block.taken.push_back(fr.blockIndex);
-        block.toGo.resize(block.rows.size());
         block.toGo[static_cast<std::size_t>(fr.blockIndex)] = toGo;
+        return true;
     };
     for (FreeRow& fr : nonContact)
         if (iteration < fr.c->m_overrideNumSolverIterations) consider(fr);
@@ -118,7 +114,7 @@ void RagdollSolver::Direct::gatherBlock(btAlignedObjectArray<btSolverBody>& body
             const btScalar total = normal.c->m_appliedImpulse;
             fr.c->m_lowerLimit = -(fr.c->m_friction * total);
             fr.c->m_upperLimit = fr.c->m_friction * total;
-            consider(fr);
+            if (consider(fr)) fr.normal = normal.blockIndex;
         }
     }
     block.added.assign(block.rows.size(), 0.0);

@@ -22,17 +22,9 @@ using afb::bullet::Ragdoll;
 using afb::bullet::RagdollAsset;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-// A 0.5 kg plate under a 50 kg block, joined by a fixed joint kept as a joint (not merged).
+// The plate under the block, its fixed joint kept as a joint (the test does not merge it).
 afb::figure::Figure plateAndBlock() {
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 2}, {"top", 0, 0, 0, 4}};
-    const auto built = afb::test::buildTestFigure(
-        "articulatedFigure pair {\n settings { selfCollision 0 }\n"
-        " body \"foot\" { joint \"origin\" model box( ( -10, -10, -1 ), ( 10, 10, 1 ) ) origin ( 0, 0, 2 ) density "
-        "0.000625 containedJoints \"origin\" }\n"
-        " body \"block\" { joint \"top\" model box( ( -10, -10, 0 ), ( 10, 10, 20 ) ) origin ( 0, 0, 3 ) density "
-        "0.0062 containedJoints \"top\" }\n"
-        " fixed \"ankle\" { body1 \"block\" body2 \"foot\" }\n}\n",
-        joints);
+    const auto built = afb::test::buildPlateUnderBlockFigure();
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     return *built.figure;

@@ -936,15 +936,7 @@ TEST_CASE("direct joints: a body landing on a light foot is stopped through the 
     // that see the plate's mass alone stop the plate and then, one iteration at a time, the block: the joint
     // opens and the block sinks into the plate's place. Through the direct solve each contact row has the
     // pair's mass at its corner: both stop in the step of impact and the joint stays closed.
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 2}, {"top", 0, 0, 0, 4}};
-    const auto built = afb::test::buildTestFigure(
-        "articulatedFigure pair {\n settings { selfCollision 0 }\n"
-        " body \"foot\" { joint \"origin\" model box( ( -10, -10, -1 ), ( 10, 10, 1 ) ) origin ( 0, 0, 2 ) density "
-        "0.000625 containedJoints \"origin\" }\n"
-        " body \"block\" { joint \"top\" model box( ( -10, -10, 0 ), ( 10, 10, 20 ) ) origin ( 0, 0, 3 ) density "
-        "0.0062 containedJoints \"top\" }\n"
-        " fixed \"ankle\" { body1 \"block\" body2 \"foot\" }\n}\n",
-        joints);
+    const auto built = afb::test::buildPlateUnderBlockFigure();
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     auto worstGap = [&](bool direct) {

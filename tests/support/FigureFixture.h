@@ -91,4 +91,18 @@ inline BuiltFigure buildArmFigure(const std::string& constraint) {
                            joints);
 }
 
+/// A 0.5 kg plate (`foot`, 20 × 20 × 2 units) under a 50 kg block (`block`, 20 × 20 × 20 units) joined by a
+/// `fixed` constraint, the plate's centre 2 units above the entity's origin: the direct solve's landing tests.
+inline BuiltFigure buildPlateUnderBlockFigure() {
+    const std::vector<TestJoint> joints = {{"origin", -1, 0, 0, 2}, {"top", 0, 0, 0, 4}};
+    return buildTestFigure(
+        "articulatedFigure pair {\n settings { selfCollision 0 }\n"
+        " body \"foot\" { joint \"origin\" model box( ( -10, -10, -1 ), ( 10, 10, 1 ) ) origin ( 0, 0, 2 ) density "
+        "0.000625 containedJoints \"origin\" }\n"
+        " body \"block\" { joint \"top\" model box( ( -10, -10, 0 ), ( 10, 10, 20 ) ) origin ( 0, 0, 3 ) density "
+        "0.0062 containedJoints \"top\" }\n"
+        " fixed \"ankle\" { body1 \"block\" body2 \"foot\" }\n}\n",
+        joints);
+}
+
 } // namespace afb::test
