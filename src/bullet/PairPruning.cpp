@@ -21,7 +21,6 @@ namespace {
 
 using figure::Figure;
 using figure::FigureConstraint;
-using figure::JointType;
 using Vec = Eigen::Vector3d;
 
 constexpr double kPi = std::numbers::pi;
@@ -112,9 +111,11 @@ Region hop(const Figure& f, const FigureConstraint& c, int moving, const Region&
     const figure::Transform& pose2 = f.bodies[static_cast<std::size_t>(c.body2)].loadPose;
     const Vec anchor = pose1.apply(c.frameInBody1.position);
     const bool movingIsBody1 = moving == c.body1;
-    switch (c.type) {
-    case JointType::Fixed: return r;
-    case JointType::Hinge: {
+    const figure::JointFreedom freedom = figure::freedomOf(c.type);
+    if (freedom.anchor != figure::AnchorHold::Point) return sphereAbout(r, anchor); // not followed (pathBetween)
+    switch (freedom.rotation) {
+    case figure::RotationHold::All: return r;
+    case figure::RotationHold::AllButAxis: {
         const Vec axis = (pose1.rotation * c.frameInBody1.rotation.col(2)).normalized();
         double lo = -kPi, hi = kPi;
         if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
@@ -126,8 +127,8 @@ Region hop(const Figure& f, const FigureConstraint& c, int moving, const Region&
         }
         return hingeSweep(r, anchor, axis, lo, hi);
     }
-    case JointType::BallAndSocket:
-    case JointType::Universal: {
+    case figure::RotationHold::None:
+    case figure::RotationHold::Twist: {
         if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
             const Vec shaft = pose1.rotation * cone->shaftInBody1, axis = pose2.rotation * cone->axisInBody2;
             return swingCone(r, anchor, movingIsBody1 ? shaft : axis, movingIsBody1 ? axis : shaft,
@@ -145,15 +146,13 @@ Region hop(const Figure& f, const FigureConstraint& c, int moving, const Region&
         }
         return sphereAbout(r, anchor);
     }
-    case JointType::Slider:
-    case JointType::Spring: break; // not followed (pathBetween)
     }
     return sphereAbout(r, anchor);
 }
 
 /// The joints a pruning path may follow: every constraint between two bodies that keeps their anchors together.
 bool followed(const FigureConstraint& c) {
-    return c.body2 >= 0 && c.body1 != c.body2 && c.type != JointType::Slider && c.type != JointType::Spring;
+    return c.body2 >= 0 && c.body1 != c.body2 && figure::freedomOf(c.type).anchor == figure::AnchorHold::Point;
 }
 
 /// A shortest path of followed joints from body `from` to body `to`: the bodies and the constraints between them

@@ -87,9 +87,9 @@ const btTypedConstraint* Ragdoll::constraint(int i) const {
     requireRigid("constraint");
     return m_main[static_cast<std::size_t>(i)];
 }
-bool Ragdoll::bulletConstraintIsLimit(int k) const {
-    requireRigid("bulletConstraintIsLimit");
-    return m_limitRows[static_cast<std::size_t>(k)];
+RowRole Ragdoll::bulletConstraintRole(int k) const {
+    requireRigid("bulletConstraintRole");
+    return m_roles[static_cast<std::size_t>(k)];
 }
 btTypedConstraint& Ragdoll::bulletConstraint(int k) {
     requireRigid("bulletConstraint");
@@ -423,7 +423,7 @@ void Ragdoll::removeBulletObjects() {
     m_calmSubsteps = 0;
     m_action->frictions.clear();
     m_constraints.clear();
-    m_limitRows.clear();
+    m_roles.clear();
     m_main.clear();
     m_frames.clear();
     m_rigidFrames.clear();

@@ -113,9 +113,10 @@ class Ragdoll::Action : public btActionInterface {
                 // a slider's anchors move apart along its axis by design, jointError measures it off the axis.
                 const figure::FigureConstraint& fc = m_owner.figure().constraints[static_cast<std::size_t>(c)];
                 double gap = 0;
-                if (fc.type == figure::JointType::Spring || m_owner.m_layout->internal[static_cast<std::size_t>(c)])
+                const figure::AnchorHold held = figure::freedomOf(fc.type).anchor;
+                if (held == figure::AnchorHold::None || m_owner.m_layout->internal[static_cast<std::size_t>(c)])
                     continue;
-                if (fc.type == figure::JointType::Slider) gap = m_owner.jointError(c).anchorM;
+                if (held == figure::AnchorHold::Line) gap = m_owner.jointError(c).anchorM;
                 else {
                     const auto [frame1, frame2] = m_owner.constraintFramesWorld(c);
                     gap = (frame1.getOrigin() - frame2.getOrigin()).length();

@@ -7,6 +7,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include "EngineFriction.h"
+#include "JointBuilders.h"
 #include "Multibody.h"
 #include "ObjectArena.h"
 #include "RagdollAction.h"
@@ -96,20 +97,16 @@ std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const 
 
 void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
-    detail::ObjectArena& arena = *m_arena;
-    const int iterations = m_method.jointIterations;
-    const LimitRowPolicy policy{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits};
+    const JointPolicy policy{{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits},
+                             m_method.constantVelocityUniversal};
     // At most a main constraint, its friction and a limit per joint.
     m_frames.reserve(f.constraints.size());
     m_rigidFrames.reserve(f.constraints.size());
     m_main.reserve(f.constraints.size());
     m_constraints.reserve(3 * f.constraints.size());
-    m_limitRows.reserve(3 * f.constraints.size());
-    const btScalar lever = static_cast<btScalar>(f.units.metresPerUnit);
+    m_roles.reserve(3 * f.constraints.size());
     for (std::size_t ci = 0; ci < f.constraints.size(); ++ci) {
         const FigureConstraint& c = f.constraints[ci];
-        btRigidBody& a = body(c.body1);
-        btRigidBody& b = other(c.body2);
         m_frames.emplace_back(toBt(c.frameInBody1), frameOfBody2(c));
         // The frames in the rigid bodies' frames (a merged body sits at an offset in its rigid).
         const btTransform& offsetA = bodyInRigid(c.body1);
@@ -121,128 +118,48 @@ void Ragdoll::addConstraints() {
             continue;
         }
         // Directions fixed in body1 and in body2 as Bullet sees the rigid bodies' frames (world for the world).
-        const btMatrix3x3& b1Rot = offsetA.getBasis();
-        const btMatrix3x3 b2Rot = c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis();
-        btTypedConstraint* main = nullptr;
-        btTypedConstraint* limit = nullptr;
-        btMatrix3x3 frictionAxes = fb.getBasis();
-        int frictionRows = 0;
+        const JointSite site{body(c.body1),
+                             other(c.body2),
+                             fa,
+                             fb,
+                             offsetA.getBasis(),
+                             c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis()};
+        addJoint(c, buildJoint(*m_arena, c, site, policy));
+    }
+}
 
-        switch (c.type) {
-        case JointType::Fixed: main = arena.make<btFixedConstraint>(a, b, fa, fb); break;
-        case JointType::BallAndSocket:
-            frictionAxes = btMatrix3x3::getIdentity() * b2Rot;
-            frictionRows = 3;
-            if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-                // btConeTwistConstraint: twist about X is free (span < 0), swing keeps the X axes within the
-                // half-angle: frame B's X is the cone axis (body2), frame A's X the shaft (body1), and frame A
-                // is frame B turned along the shortest arc, so the twist starts at 0.
-                const btVector3 axisB = b2Rot * toBt(cone->axisInBody2);
-                const btVector3 shaftA = b1Rot * toBt(cone->shaftInBody1);
-                const btMatrix3x3 frameBRot = basisWithX(axisB);
-                const btTransform bWorld = b.getCenterOfMassTransform();
-                const btTransform aWorld = a.getCenterOfMassTransform();
-                const btVector3 axisW = bWorld.getBasis() * axisB, shaftW = aWorld.getBasis() * shaftA;
-                const btMatrix3x3 frameAWorld = shortestArc(axisW, shaftW) * (bWorld.getBasis() * frameBRot);
-                const btTransform frameA(aWorld.getBasis().transpose() * frameAWorld, fa.getOrigin());
-                const btTransform frameB(frameBRot, fb.getOrigin());
-                const btScalar h = static_cast<btScalar>(cone->halfAngleRad);
-                if (policy.speculative) {
-                    // Our own cone row (speculative); the anchor alone is a point-to-point.
-                    main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
-                    limit = arena.make<DirectionLimitConstraint>(a, b, shaftA, frameBRot, LimitShape::Cone, h,
-                                                                 btScalar(0), policy);
-                } else {
-                    auto* ct = arena.make<btConeTwistConstraint>(a, b, frameA, frameB);
-                    ct->setLimit(h, h, btScalar(-1), btScalar(1), policy.errorReduction, btScalar(1));
-                    main = ct;
-                }
-            } else {
-                main = arena.make<btPoint2PointConstraint>(a, b, fa.getOrigin(), fb.getOrigin());
-            }
-            break;
-        case JointType::Universal: {
-            // No relative spin about the shafts (homokinetic, §4.4), swing free: our constant-velocity constraint
-            // (Method::constantVelocityUniversal), or cone-twist with twist locked; frames' X axes are shaft 1
-            // (body1) and −shaft 2 (body2), aligned at the load pose.
-            if (m_method.constantVelocityUniversal) main = arena.make<UniversalConstraint>(a, b, fa, fb);
-            else {
-                auto* ct = arena.make<btConeTwistConstraint>(a, b, fa, fb);
-                ct->setLimit(SIMD_PI, SIMD_PI, 0);
-                main = ct;
-            }
-            frictionRows = 2;
-            frictionAxes.setValue(fb.getBasis()[0][1], fb.getBasis()[0][2], 0, fb.getBasis()[1][1], fb.getBasis()[1][2],
-                                  0, fb.getBasis()[2][1], fb.getBasis()[2][2], 0);
-            break;
-        }
-        case JointType::Hinge: {
-            auto* h = arena.make<btHingeConstraint>(a, b, fa, fb, false);
-            if (const auto* range = std::get_if<figure::HingeRange>(&c.limit)) {
-                const btScalar lo = static_cast<btScalar>(range->lowerRad), hi = static_cast<btScalar>(range->upperRad);
-                if (policy.speculative) limit = arena.make<HingeRangeConstraint>(a, b, fa, fb, lo, hi, policy);
-                else h->setLimit(lo, hi, 1, policy.errorReduction, 1);
-            }
-            main = h;
-            frictionRows = 1;
-            frictionAxes.setValue(fb.getBasis()[0][2], 0, 0, fb.getBasis()[1][2], 0, 0, fb.getBasis()[2][2], 0, 0);
-            break;
-        }
-        case JointType::Slider: main = arena.adopt(makeSlider(a, b, fa, fb)); break;
-        case JointType::Spring: {
-            const SpringConstraint::Params p = SpringConstraint::Params::of(c.spring);
-            main = arena.make<SpringConstraint>(a, b, fa.getOrigin(), fb.getOrigin(), p);
-            break;
-        }
-        }
-
-        // Pyramid limits (ball) and every universal limit: our direction-limit rows.
-        if (c.type == JointType::Universal || c.type == JointType::BallAndSocket) {
-            if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit))
-                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(p->shaftInBody1),
-                                                             b2Rot * toBt(p->basisInBody2),
-                                                             DirectionLimitConstraint::Shape::Pyramid,
-                                                             static_cast<btScalar>(p->halfAngle1Rad),
-                                                             static_cast<btScalar>(p->halfAngle2Rad), policy);
-            const auto* cone = std::get_if<figure::ConeLimit>(&c.limit);
-            if (cone && c.type == JointType::Universal)
-                limit = arena.make<DirectionLimitConstraint>(a, b, b1Rot * toBt(cone->shaftInBody1),
-                                                             basisWithX(b2Rot * toBt(cone->axisInBody2)),
-                                                             DirectionLimitConstraint::Shape::Cone,
-                                                             static_cast<btScalar>(cone->halfAngleRad), btScalar(0),
-                                                             policy);
-        }
-
-        m_main.push_back(main);
-        if (iterations > 0) {
-            if (main) main->setOverrideNumSolverIterations(iterations);
-            if (limit) limit->setOverrideNumSolverIterations(iterations);
-        }
-        if (main) {
-            // Collision between the joint's bodies is off through filterPairs (RigidLayout::ignoredPairs has every
-            // pair a joint disables, §6.2), not through Bullet's constraint references, which would add the same
-            // entry to each body's list again, with a linear search per constraint and body, at every spawn.
-            m_world.addConstraint(main);
-            if (c.friction > 0 && frictionRows > 0) {
-                auto* fb2 = arena.make<btJointFeedback>();
-                main->setJointFeedback(fb2);
-                auto* fr = arena.make<JointFrictionConstraint>(a, b, frictionAxes, frictionRows);
-                m_action->frictions.push_back({fr, fb2, static_cast<btScalar>(c.friction) * lever});
-                m_feedback.push_back(fb2);
-                m_constraints.push_back(main);
-                m_world.addConstraint(fr);
-                m_constraints.push_back(fr);
-            } else {
-                m_constraints.push_back(main);
-            }
-        }
-        m_limitRows.resize(m_constraints.size(), false);
-        if (limit) {
-            m_world.addConstraint(limit);
-            m_constraints.push_back(limit);
-            m_limitRows.push_back(true);
+// The joint's constraints into the world in a fixed order (main, its friction, its limit), each with its role.
+void Ragdoll::addJoint(const FigureConstraint& c, const JointParts& parts) {
+    btTypedConstraint* const main = parts.main;
+    btTypedConstraint* const limit = parts.limit;
+    m_main.push_back(main);
+    if (m_method.jointIterations > 0) {
+        if (main) main->setOverrideNumSolverIterations(m_method.jointIterations);
+        if (limit) limit->setOverrideNumSolverIterations(m_method.jointIterations);
+    }
+    const auto add = [this](btTypedConstraint* constraint, RowRole role) {
+        m_world.addConstraint(constraint);
+        m_constraints.push_back(constraint);
+        m_roles.push_back(role);
+    };
+    if (main) {
+        // Collision between the joint's bodies is off through filterPairs (RigidLayout::ignoredPairs has every
+        // pair a joint disables, §6.2), not through Bullet's constraint references, which would add the same
+        // entry to each body's list again, with a linear search per constraint and body, at every spawn.
+        add(main, parts.mainRole);
+        if (c.friction > 0 && parts.frictionRows > 0) {
+            auto* feedback = m_arena->make<btJointFeedback>();
+            main->setJointFeedback(feedback);
+            btRigidBody& a = body(c.body1);
+            btRigidBody& b = other(c.body2);
+            auto* friction = m_arena->make<JointFrictionConstraint>(a, b, parts.frictionAxes, parts.frictionRows);
+            const btScalar lever = static_cast<btScalar>(figure().units.metresPerUnit);
+            m_action->frictions.push_back({friction, feedback, static_cast<btScalar>(c.friction) * lever});
+            m_feedback.push_back(feedback);
+            add(friction, RowRole::Friction);
         }
     }
+    if (limit) add(limit, RowRole::Limit);
 }
 
 // §6.2: every pair of the ragdoll's bodies that does not test contact (RigidLayout::ignoredPairs, computed once per

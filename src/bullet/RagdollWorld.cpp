@@ -522,8 +522,9 @@ void RagdollWorld::trackJoints(Ragdoll& r) {
     if (auto* solver = dynamic_cast<RagdollSolver*>(m_world.getConstraintSolver()))
         for (int k = 0; k < r.bulletConstraintCount(); ++k) {
             // Limit rows by their own knob (Method::limitWarmStarting); a limit row is never part of the direct
-            // solve's block (its rows are bounded), so it is tracked only to be warm-started.
-            const bool limit = r.bulletConstraintIsLimit(k);
+            // solve's block (its rows are bounded), so it is tracked only to be warm-started. Joint, friction and
+            // spring rows by the joint knobs (the direct solve takes only unbounded rows).
+            const bool limit = r.bulletConstraintRole(k) == RowRole::Limit;
             const bool warm = limit ? r.method().limitWarmStarting : r.method().jointWarmStarting;
             const bool direct = !limit && r.method().directJoints;
             if (warm || direct) solver->track(r.bulletConstraint(k), warm, direct);

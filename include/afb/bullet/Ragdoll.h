@@ -29,6 +29,15 @@ class RagdollWorldLink;
 inline constexpr double kBodyRestitution = 0.4;
 
 class Ragdoll;
+struct JointParts;
+
+/// What the rows of one of a ragdoll's Bullet constraints do (Ragdoll::bulletConstraintRole).
+enum class RowRole {
+    Joint,    ///< keep the joint together: anchors and locked axes (equalities)
+    Limit,    ///< a limit of its own: cone, pyramid or hinge range (one-sided)
+    Friction, ///< joint friction, bounded by the joint's reaction (docs/format.md §4.8)
+    Spring,   ///< a spring's length (docs/format.md §4.7)
+};
 
 /// What tripped a ragdoll's explosion guard.
 struct GuardTrip {
@@ -217,9 +226,11 @@ class Ragdoll {
     /// Every Bullet constraint the ragdoll added (main constraints, limits, friction, spring lengths); 0 for a
     /// multibody ragdoll.
     int bulletConstraintCount() const { return static_cast<int>(m_constraints.size()); }
-    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint);
-    /// throws std::logic_error on a multibody ragdoll.
-    bool bulletConstraintIsLimit(int k) const;
+    /// What the rows of Bullet constraint `k` do; throws std::logic_error on a multibody ragdoll.
+    RowRole bulletConstraintRole(int k) const;
+    /// Whether Bullet constraint `k` is a limit of its own (DirectionLimitConstraint, HingeRangeConstraint), i.e.
+    /// its role is RowRole::Limit; throws std::logic_error on a multibody ragdoll.
+    bool bulletConstraintIsLimit(int k) const { return bulletConstraintRole(k) == RowRole::Limit; }
     /// Bullet constraint `k` of those, in the order they were added to the world; throws std::logic_error on a
     /// multibody ragdoll.
     btTypedConstraint& bulletConstraint(int k);
@@ -334,6 +345,7 @@ class Ragdoll {
     void removeBulletObjects(); ///< constraints and bodies out of the world and destroyed (the layout stays)
     void rememberGoodState();   ///< the explosion guard's saved state := now
     void addConstraints();
+    void addJoint(const figure::FigureConstraint& c, const JointParts& parts);
     void filterPairs();
     void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
@@ -358,7 +370,7 @@ class Ragdoll {
     std::unique_ptr<detail::ObjectArena> m_arena;  ///< owns the bodies, constraints and feedback below
     std::vector<btRigidBody*> m_bodies;            ///< one per rigid of m_layout
     std::vector<btTypedConstraint*> m_constraints; ///< in the order added to the world
-    std::vector<bool> m_limitRows;                 ///< per Bullet constraint: one of our limit constraints
+    std::vector<RowRole> m_roles;                  ///< per Bullet constraint, what its rows do
     int m_group = 0;                               ///< collision group of every body
     int m_spawnMask = 0;                           ///< SpawnOptions::collisionMask
     std::vector<int> m_masks;                      ///< collision mask of each rigid body

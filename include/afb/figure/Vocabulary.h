@@ -26,6 +26,35 @@ enum class JointType : std::uint8_t {
     Spring,        ///< a quadratic force between two anchors, no kinematic constraint
 };
 
+/// What a joint keeps its two bodies' anchors to: one shared point, a line through body2's anchor along the joint's
+/// axis (a slider), or nothing (a spring pulls them together by force alone).
+enum class AnchorHold : std::uint8_t { Point, Line, None };
+
+/// Which relative rotations a joint forbids: none (a ball), the twist about the two shafts (a universal joint),
+/// every rotation but about its axis (a hinge), or all (fixed, slider, docs/format.md §4.2–§4.6). A spring forbids
+/// none.
+enum class RotationHold : std::uint8_t { None, Twist, AllButAxis, All };
+
+/// The relative motions a joint type forbids: every layer that treats joint types alike (the rigid and multibody
+/// backends, the position pass, the pruning of self-collision pairs) reads them here.
+struct JointFreedom {
+    AnchorHold anchor;
+    RotationHold rotation;
+};
+
+/// The freedoms of a joint type (JointFreedom).
+constexpr JointFreedom freedomOf(JointType type) {
+    switch (type) {
+    case JointType::Fixed: return {AnchorHold::Point, RotationHold::All};
+    case JointType::BallAndSocket: return {AnchorHold::Point, RotationHold::None};
+    case JointType::Universal: return {AnchorHold::Point, RotationHold::Twist};
+    case JointType::Hinge: return {AnchorHold::Point, RotationHold::AllButAxis};
+    case JointType::Slider: return {AnchorHold::Line, RotationHold::All};
+    case JointType::Spring: return {AnchorHold::None, RotationHold::None};
+    }
+    return {AnchorHold::None, RotationHold::None};
+}
+
 /// The shape's `.af` keyword: "box", "octahedron", "dodecahedron", "cylinder", "cone" or "bone".
 const char* toString(ShapeType type);
 
