@@ -102,6 +102,7 @@ int drawCommand(const DrawCli& opt) {
         usageError("--out " + opt.out.string() + ": the picture must be a .png or .svg file");
     // The method is checked before anything runs, though only a drop (--at) uses it.
     const bullet::Method method = resolveMethod(*opt.method);
+    if (opt.atSeconds) checkStepCount("--at", *opt.atSeconds, opt.drop.hz);
     figure::UnitSystem units;
     if (opt.doomGravity) units.gravityMps2 = units.doomGravityMps2();
     text::Diagnostics diags;

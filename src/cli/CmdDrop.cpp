@@ -81,6 +81,7 @@ void addDropOptions(CLI::App* cmd, DropCli& opt) {
 
 // Options that do not go together, refused before anything runs.
 void checkDropOptions(const DropCli& opt, const bullet::Method& method) {
+    if (!opt.steps) checkStepCount("--seconds", opt.drop.seconds, opt.drop.hz);
     if (opt.json == "-" && opt.csv == "-") usageError("--json - and --csv - both ask for stdout; give one a file");
     if (opt.drop.lod && (sim::isRaw(method) || method.backend != bullet::Backend::Rigid))
         usageError("--lod needs the rigid backend (not the raw method or the multibody backend)");

@@ -129,6 +129,7 @@ void addRecordCommand(CLI::App* golden, int& exitCode) {
         ->capture_default_str();
     record->callback([rec, &exitCode] {
         rec->drop.method = resolveMethod(*rec->method);
+        checkStepCount("--seconds", rec->drop.seconds, rec->drop.hz);
         rec->drop.seed = rec->seed;
         text::Diagnostics diags;
         const Run run = runScenario(rec->base, rec->entity, rec->drop, diags);

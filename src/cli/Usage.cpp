@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 #include "Suggest.h"
 
@@ -86,6 +87,11 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& error) {
               << "Run '" << commandPath(cmd) << " --help' for the "
               << (commandNames(cmd).empty() ? "options" : "commands") << ".\n";
     return kExitUsage;
+}
+
+void checkStepCount(const std::string& option, double seconds, double hz) {
+    if (seconds * hz > std::numeric_limits<int>::max())
+        usageError(option + " " + number(seconds) + " at --hz " + number(hz) + ": more steps than a run can count");
 }
 
 CLI::Validator positive() {

@@ -19,6 +19,9 @@ inline constexpr int kExitUsage = 2;
 /// help or the version, else 2.
 int reportParseError(const CLI::App& app, const CLI::ParseError& error);
 
+/// Refuses a simulated time that is more steps at `hz` than a step count holds (2^31 - 1); `option` names the time.
+void checkStepCount(const std::string& option, double seconds, double hz);
+
 /// Option checks for real numbers; each also refuses NaN and infinities.
 /// A number > 0.
 CLI::Validator positive();

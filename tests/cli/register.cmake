@@ -143,6 +143,8 @@ afb_cli_test(usage_height_negative 2 ARGS drop --base . chain --height -1 MATCH 
 afb_cli_test(usage_hz_zero 2 ARGS drop --base . chain --hz 0 MATCH "--hz: Value 0 is not a positive number")
 afb_cli_test(usage_hz_nan 2 ARGS drop --base . chain --hz nan MATCH "--hz: Value nan is not")
 afb_cli_test(usage_seconds_negative 2 ARGS drop --base . chain --seconds -2 MATCH "--seconds: Value -2 is not")
+afb_cli_test(usage_too_many_steps 2 ARGS drop --base . chain --seconds 1e9 --hz 1000
+             MATCH "--seconds 1e\\+?0*9 at --hz 1000: more steps than a run can count")
 afb_cli_test(usage_steps_negative 2 ARGS drop --base . chain --steps -1 MATCH "--steps")
 afb_cli_test(usage_method_misspelt 2 ARGS drop --base . chain --method defualt
              MATCH "unknown method 'defualt'; did you mean 'default'\\?")
