@@ -8,6 +8,8 @@
 
 #include "ChartPlot.h"
 #include "Commands.h"
+#include "MethodOptions.h"
+#include "Usage.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Chart.h"
 #include "afb/sim/RawRagdoll.h"
@@ -36,6 +38,135 @@ void drawProgress(int done, int total, double elapsedSeconds) {
     std::fflush(stderr);
 }
 
+struct ChartCli {
+    std::filesystem::path base = ".";
+    std::vector<std::string> entities;
+    // exact is the default; the iterative default it replaced stays on the front.
+    std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
+    sim::ChartOptions chart;
+    std::filesystem::path out = "chart";
+    std::string precision;
+    bool noSleep = false;
+    std::optional<double> maxAnchor, maxLimit, maxPenetration, maxSettle;
+};
+
+void addChartOptions(CLI::App* cmd, ChartCli& opt) {
+    cmd->add_option("entities", opt.entities, "entityDefs to chart")->required();
+    cmd->add_option("--base", opt.base, "Content folder (af/, def/, models/)")->capture_default_str();
+    cmd->add_option("--methods", opt.methods, "Methods to chart, comma-separated (NAME[:KNOB=VALUE]...)")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--heights", opt.chart.heightsM, "Drop heights, m, comma-separated")
+        ->delimiter(',')
+        ->check(within(0, 10000))
+        ->capture_default_str();
+    cmd->add_option("--hz", opt.chart.hz, "Frame rates, comma-separated")
+        ->delimiter(',')
+        ->check(within(1, 10000))
+        ->capture_default_str();
+    cmd->add_option("--repeats", opt.chart.repeats, "Runs of each combination (the cost's median and spread)")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    cmd->add_option("--seconds", opt.chart.seconds, "Simulated time per run, s")
+        ->check(within(0, 3600))
+        ->capture_default_str();
+    cmd->add_option("--count", opt.chart.count, "Instances per run (one world, yaw 37°·i)")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
+    cmd->add_option("--threads", opt.chart.threads, "Worker threads (each run owns its world)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->add_option("--out", opt.out, "Output folder (created)")->capture_default_str();
+    cmd->add_option("--precision", opt.precision, "Bullet build: float or double (default: this binary's)")
+        ->check(CLI::IsMember({"float", "double"}));
+    cmd->add_flag("--no-sleep", opt.noSleep, "Never put figures to rest (no settle times)");
+    cmd->add_option("--max-anchor-error", opt.maxAnchor, "Bound on the anchor error for the cheapest-method choice, m")
+        ->check(nonNegative());
+    cmd->add_option("--max-limit-error", opt.maxLimit, "Bound on the limit overshoot, degrees")->check(nonNegative());
+    cmd->add_option("--max-penetration", opt.maxPenetration, "Bound on the peak penetration, m")->check(nonNegative());
+    cmd->add_option("--max-settle-time", opt.maxSettle, "Bound on the settle time, s")->check(nonNegative());
+}
+
+// The methods of --methods, each once; a spec that does not parse is a usage error.
+std::vector<sim::ChartMethod> parseMethods(const std::vector<std::string>& specs) {
+    std::vector<sim::ChartMethod> methods;
+    for (const std::string& spec : specs) {
+        std::string error;
+        auto m = sim::parseChartMethod(spec, error);
+        if (!m) usageError(error + methodSpecHint(spec));
+        for (const sim::ChartMethod& other : methods)
+            if (other.label == m->label) usageError("method " + spec + " is listed twice");
+        methods.push_back(std::move(*m));
+    }
+    return methods;
+}
+
+// Runs the matrix into --out and prints its summary.
+void runChartInto(const ChartCli& opt, const std::vector<figure::Figure>& figures,
+                  const std::vector<std::string>& names) {
+    const sim::ChartOptions& chart = opt.chart;
+    const std::size_t total =
+        figures.size() * chart.methods.size() * chart.heightsM.size() * chart.hz.size() * chart.repeats;
+    std::printf("afb chart: Bullet %s (%s), %zu runs on %d threads into %s\n", sim::bulletVersion().c_str(),
+                sim::bulletPrecision(), total, chart.threads, opt.out.string().c_str());
+    std::fflush(stdout);
+    const auto start = std::chrono::steady_clock::now();
+    const bool tty = ::isatty(STDERR_FILENO) != 0;
+    const std::vector<sim::ChartRun> runs = sim::runChart(figures, chart, [&](int done, int all) {
+        if (tty)
+            drawProgress(done, all, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    });
+    const std::vector<sim::ChartPoint> points = sim::chartPoints(runs, names, chart.methods);
+    const sim::ChartBounds bounds{opt.maxAnchor, opt.maxLimit, opt.maxPenetration, opt.maxSettle};
+
+    std::ofstream(opt.out / "runs.csv") << sim::chartRunsCsv(runs);
+    const std::string summary = sim::chartSummaryMarkdown(points, chart, bounds, runs.size());
+    std::ofstream(opt.out / "summary.md") << summary;
+    std::string heights, rates;
+    for (double h : chart.heightsM) heights += (heights.empty() ? "" : ", ") + CLI::detail::to_string(h);
+    for (double hz : chart.hz) rates += (rates.empty() ? "" : ", ") + CLI::detail::to_string(hz);
+    const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", drops from " +
+                                 heights + " m at " + rates + " Hz, " + CLI::detail::to_string(chart.seconds) +
+                                 " s; errors: worst over the drops";
+    std::string plotError = writeChartPlot(opt.out, points, chart, subtitle);
+    if (plotError.empty()) plotError = runGnuplot(opt.out);
+    std::printf("\n%s", summary.c_str());
+    for (const sim::ChartPoint& p : points)
+        if (p.exploded) std::printf("note: %s exploded on %s\n", p.label.c_str(), p.figure.c_str());
+    if (!plotError.empty()) std::cerr << "afb chart: warning: no front.png/front.svg: " << plotError << "\n";
+    std::printf("\nwrote %s/{runs.csv,summary.md,front.gp,front.dat%s}\n", opt.out.string().c_str(),
+                plotError.empty() ? ",front.png,front.svg" : "");
+}
+
+int chartCommand(ChartCli& opt) {
+    sim::ChartOptions& chart = opt.chart;
+    chart.sleeping = !opt.noSleep;
+    chart.methods = parseMethods(opt.methods);
+    if (chart.heightsM.empty() || chart.hz.empty() || chart.methods.empty())
+        usageError("--heights, --hz and --methods need at least one value each");
+    text::Diagnostics diags;
+    auto lib = decl::Library::open(opt.base, diags);
+    std::vector<figure::Figure> figures;
+    std::vector<std::string> names;
+    if (lib && findEntities(*lib, opt.entities, diags))
+        for (const std::string& e : opt.entities) {
+            std::optional<figure::LoadedFigure> loaded = figure::loadEntityFigure(*lib, e, {}, diags);
+            if (!loaded) continue;
+            names.push_back(loaded->figure.name);
+            figures.push_back(std::move(loaded->figure));
+        }
+    printDiagnostics(diags);
+    if (diags.hasErrors() || figures.empty()) return kExitFailure;
+    std::error_code ec;
+    std::filesystem::create_directories(opt.out, ec);
+    if (ec) {
+        std::cerr << "afb chart: cannot create " << opt.out.string() << ": " << ec.message() << "\n";
+        return kExitFailure;
+    }
+    runChartInto(opt, figures, names);
+    return 0;
+}
+
 } // namespace
 
 void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
@@ -48,146 +179,15 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
                 "raw:substeps=4 or default:position-iterations=8 (knobs as in afb drop --help).\n"
                 "Cost: thread CPU time inside the steps per awake body-step (median of the repeats, min-max shown). "
                 "Instruction counts: docs/performance.md.");
-    struct Options {
-        std::filesystem::path base = ".";
-        std::vector<std::string> entities;
-        // exact is the default; the iterative default it replaced stays on the front.
-        std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
-        sim::ChartOptions chart;
-        std::filesystem::path out = "chart";
-        std::string precision;
-        bool noSleep = false;
-        std::optional<double> maxAnchor, maxLimit, maxPenetration, maxSettle;
-    };
-    auto opt = std::make_shared<Options>();
-    cmd->add_option("entities", opt->entities, "entityDefs to chart")->required();
-    cmd->add_option("--base", opt->base, "Content folder (af/, def/, models/)")->capture_default_str();
-    cmd->add_option("--methods", opt->methods, "Methods to chart, comma-separated (NAME[:KNOB=VALUE]...)")
-        ->delimiter(',')
-        ->capture_default_str();
-    cmd->add_option("--heights", opt->chart.heightsM, "Drop heights, m, comma-separated")
-        ->delimiter(',')
-        ->capture_default_str();
-    cmd->add_option("--hz", opt->chart.hz, "Frame rates, comma-separated")->delimiter(',')->capture_default_str();
-    cmd->add_option("--repeats", opt->chart.repeats, "Runs of each combination (the cost's median and spread)")
-        ->check(CLI::Range(1, 100))
-        ->capture_default_str();
-    cmd->add_option("--seconds", opt->chart.seconds, "Simulated time per run, s")
-        ->check(CLI::Range(0.0, 3600.0))
-        ->capture_default_str();
-    cmd->add_option("--count", opt->chart.count, "Instances per run (one world, yaw 37°·i)")
-        ->check(CLI::Range(1, 1000))
-        ->capture_default_str();
-    cmd->add_option("--threads", opt->chart.threads, "Worker threads (each run owns its world)")
-        ->check(CLI::Range(1, 256))
-        ->capture_default_str();
-    cmd->add_option("--out", opt->out, "Output folder (created)")->capture_default_str();
-    cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
-        ->check(CLI::IsMember({"float", "double"}));
-    cmd->add_flag("--no-sleep", opt->noSleep, "Never put figures to rest (no settle times)");
-    cmd->add_option("--max-anchor-error", opt->maxAnchor,
-                    "Bound on the anchor error for the cheapest-method choice, m");
-    cmd->add_option("--max-limit-error", opt->maxLimit, "Bound on the limit overshoot, degrees");
-    cmd->add_option("--max-penetration", opt->maxPenetration, "Bound on the peak penetration, m");
-    cmd->add_option("--max-settle-time", opt->maxSettle, "Bound on the settle time, s");
+    auto opt = std::make_shared<ChartCli>();
+    addChartOptions(cmd, *opt);
     cmd->callback([opt, &exitCode, argv] {
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
             execOtherPrecision(opt->precision, argv, "afb chart");
-            exitCode = 1;
+            exitCode = kExitFailure;
             return;
         }
-        sim::ChartOptions& chart = opt->chart;
-        chart.sleeping = !opt->noSleep;
-        for (const std::string& spec : opt->methods) {
-            std::string error;
-            auto m = sim::parseChartMethod(spec, error);
-            if (!m) {
-                std::cerr << "afb chart: " << error << "\n";
-                exitCode = 1;
-                return;
-            }
-            for (const sim::ChartMethod& other : chart.methods)
-                if (other.label == m->label) {
-                    std::cerr << "afb chart: method " << spec << " is listed twice\n";
-                    exitCode = 1;
-                    return;
-                }
-            chart.methods.push_back(std::move(*m));
-        }
-        for (double h : chart.heightsM)
-            if (!(h >= 0 && h <= 10000)) {
-                std::cerr << "afb chart: --heights: " << h << " is not in [0, 10000] m\n";
-                exitCode = 1;
-                return;
-            }
-        for (double hz : chart.hz)
-            if (!(hz >= 1 && hz <= 10000)) {
-                std::cerr << "afb chart: --hz: " << hz << " is not in [1, 10000]\n";
-                exitCode = 1;
-                return;
-            }
-        if (chart.heightsM.empty() || chart.hz.empty() || chart.methods.empty()) {
-            std::cerr << "afb chart: --heights, --hz and --methods need at least one value each\n";
-            exitCode = 1;
-            return;
-        }
-
-        text::Diagnostics diags;
-        auto lib = decl::Library::open(opt->base, diags);
-        std::vector<figure::Figure> figures;
-        std::vector<std::string> names;
-        for (const std::string& e : opt->entities) {
-            std::optional<figure::LoadedFigure> loaded;
-            if (lib) loaded = figure::loadEntityFigure(*lib, e, {}, diags);
-            if (!loaded) continue;
-            names.push_back(loaded->figure.name);
-            figures.push_back(std::move(loaded->figure));
-        }
-        printDiagnostics(diags);
-        if (diags.hasErrors() || figures.empty()) {
-            exitCode = 1;
-            return;
-        }
-        std::error_code ec;
-        std::filesystem::create_directories(opt->out, ec);
-        if (ec) {
-            std::cerr << "afb chart: cannot create " << opt->out.string() << ": " << ec.message() << "\n";
-            exitCode = 1;
-            return;
-        }
-
-        const std::size_t total =
-            figures.size() * chart.methods.size() * chart.heightsM.size() * chart.hz.size() * chart.repeats;
-        std::printf("afb chart: Bullet %s (%s), %zu runs on %d threads into %s\n", sim::bulletVersion().c_str(),
-                    sim::bulletPrecision(), total, chart.threads, opt->out.string().c_str());
-        std::fflush(stdout);
-        const auto start = std::chrono::steady_clock::now();
-        const bool tty = ::isatty(STDERR_FILENO) != 0;
-        const std::vector<sim::ChartRun> runs = sim::runChart(figures, chart, [&](int done, int all) {
-            if (tty)
-                drawProgress(done, all,
-                             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-        });
-        const std::vector<sim::ChartPoint> points = sim::chartPoints(runs, names, chart.methods);
-        const sim::ChartBounds bounds{opt->maxAnchor, opt->maxLimit, opt->maxPenetration, opt->maxSettle};
-
-        std::ofstream(opt->out / "runs.csv") << sim::chartRunsCsv(runs);
-        const std::string summary = sim::chartSummaryMarkdown(points, chart, bounds, runs.size());
-        std::ofstream(opt->out / "summary.md") << summary;
-        std::string heights, rates;
-        for (double h : chart.heightsM) heights += (heights.empty() ? "" : ", ") + CLI::detail::to_string(h);
-        for (double hz : chart.hz) rates += (rates.empty() ? "" : ", ") + CLI::detail::to_string(hz);
-        const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", drops from " +
-                                     heights + " m at " + rates + " Hz, " + CLI::detail::to_string(chart.seconds) +
-                                     " s; errors: worst over the drops";
-        std::string plotError = writeChartPlot(opt->out, points, chart, subtitle);
-        if (plotError.empty()) plotError = runGnuplot(opt->out);
-        std::printf("\n%s", summary.c_str());
-        for (const sim::ChartPoint& p : points)
-            if (p.exploded) std::printf("note: %s exploded on %s\n", p.label.c_str(), p.figure.c_str());
-        if (!plotError.empty()) std::cerr << "afb chart: warning: no front.png/front.svg: " << plotError << "\n";
-        std::printf("\nwrote %s/{runs.csv,summary.md,front.gp,front.dat%s}\n", opt->out.string().c_str(),
-                    plotError.empty() ? ",front.png,front.svg" : "");
+        exitCode = chartCommand(*opt);
     });
 }
 

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "Commands.h"
+#include "Usage.h"
 #include "afb/gen/Generate.h"
 
 namespace afb::cli {
@@ -132,14 +133,14 @@ void addGenCommand(CLI::App& app, int& exitCode) {
                     "Figure name (the .af decl, the entityDef, file names); default: the "
                     "model's file name");
     cmd->add_option("--mass", opt->massKg, "Total mass, kg (default: 500 kg/m^3 times the bodies' volume)")
-        ->check(CLI::Range(0.01, 1e5));
+        ->check(within(0.01, 1e5));
     cmd->add_option("--rules", opt->rules, "JSON rules overriding the built-in humanoid template (README: afb gen)");
     cmd->add_option("--unit-m", opt->unitM,
                     "Metres per model unit (default by format: md5 0.0254, glTF 1, FBX "
                     "0.01 x UnitScaleFactor, others 0.0254)")
-        ->check(CLI::Range(1e-9, 1e9));
+        ->check(within(1e-9, 1e9));
     cmd->add_option("--height", opt->heightM, "Scale the model to this height (its largest extent), metres")
-        ->check(CLI::Range(0.01, 100.0));
+        ->check(within(0.01, 100.0));
     cmd->add_option("--up", opt->up, "The model's up axis (default: y for assimp formats, z for md5)")
         ->check(CLI::IsMember({"y", "z"}));
     cmd->add_flag("--json", opt->json, "Print the generated bodies and joints as JSON on stdout");

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "Commands.h"
+#include "Usage.h"
 #include "afb/detail/DoomMath.h"
 #include "afb/figure/Load.h"
 
@@ -121,8 +122,10 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
     cmd->add_option("--name", opt->name, "Figure name in --af (default: the first)");
     cmd->add_option("--mesh", opt->mesh, "The .md5mesh (with --af)");
     cmd->add_option("--pose", opt->pose, "The af_pose .md5anim (with --af)");
-    cmd->add_option("--offset", opt->offset, "Model decl offset x y z, Doom units (with --af)")->expected(3);
-    cmd->add_option("--unit", opt->metresPerUnit, "Metres per Doom unit")->capture_default_str();
+    cmd->add_option("--offset", opt->offset, "Model decl offset x y z, Doom units (with --af)")
+        ->expected(3)
+        ->check(finite());
+    cmd->add_option("--unit", opt->metresPerUnit, "Metres per Doom unit")->check(positive())->capture_default_str();
     cmd->add_flag("--strict", opt->strict, "Refuse values the builder would repair (README: hostile numbers)");
     cmd->add_flag("--json", opt->json,
                   "Print JSON: name, metresPerUnit, joints, totalMassKg, selfCollision, bodies[{name, joint, mod, "
@@ -136,21 +139,20 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
         units.metresPerUnit = opt->metresPerUnit;
         std::optional<figure::LoadedFigure> loaded;
         if (!opt->af.empty()) {
-            if (opt->mesh.empty() || opt->pose.empty()) {
-                std::cerr << "afb inspect: --af needs --mesh and --pose\n";
-                exitCode = 1;
-                return;
-            }
+            if (opt->mesh.empty() || opt->pose.empty()) usageError("--af needs --mesh and --pose");
             loaded = figure::loadFigureFiles(opt->af, opt->name, opt->mesh, opt->pose,
                                              {opt->offset[0], opt->offset[1], opt->offset[2]}, units, diags,
                                              figure::RootTranslation::OffsetAdded, opt->strict);
         } else if (!opt->entity.empty()) {
-            if (auto lib = decl::Library::open(opt->base, diags))
-                loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags, opt->strict);
+            auto lib = decl::Library::open(opt->base, diags);
+            if (!lib || !findEntities(*lib, {opt->entity}, diags)) {
+                printDiagnostics(diags);
+                exitCode = kExitFailure;
+                return;
+            }
+            loaded = figure::loadEntityFigure(*lib, opt->entity, units, diags, opt->strict);
         } else {
-            std::cerr << "afb inspect: give an ENTITY (with --base) or --af, --mesh and --pose\n";
-            exitCode = 1;
-            return;
+            usageError("give an ENTITY (with --base) or --af, --mesh and --pose");
         }
         if (opt->json) {
             nlohmann::json j = loaded ? figureJson(loaded->figure) : nlohmann::json::object();

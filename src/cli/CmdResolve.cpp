@@ -24,7 +24,8 @@ void addResolveCommand(CLI::App& app, int& exitCode) {
     cmd->callback([opt, &exitCode] {
         text::Diagnostics diags;
         std::optional<decl::ResolvedEntity> r;
-        if (auto lib = decl::Library::open(opt->base, diags)) r = lib->resolveEntity(opt->entity, diags);
+        if (auto lib = decl::Library::open(opt->base, diags); lib && findEntities(*lib, {opt->entity}, diags))
+            r = lib->resolveEntity(opt->entity, diags);
         printDiagnostics(diags);
         if (!r) {
             exitCode = 1;

@@ -10,6 +10,9 @@
 
 #include "ChartPlot.h"
 #include "Commands.h"
+#include "MethodOptions.h"
+#include "Suggest.h"
+#include "Usage.h"
 #include "afb/figure/Load.h"
 #include "afb/sim/Stress.h"
 
@@ -80,52 +83,161 @@ std::string fixedYaw(double deg) {
     return buf;
 }
 
+struct StressCli {
+    std::filesystem::path base = ".";
+    // Every preset, the multibody backend included. Every method is judged on its physics alone; default+rest is
+    // the default as the library spawns a ragdoll (SpawnOptions::comeToRest, the engine's rest rules), the verdict
+    // a game sees.
+    std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "iterative",
+                                        "default", "default+rest", "accurate", "multibody"};
+    std::vector<std::string> scenarios;
+    std::filesystem::path out = "stress";
+    int threads = 2;
+    int yaws = 1;
+    std::string precision;
+    bool list = false, ci = false;
+};
+
+void addStressOptions(CLI::App* cmd, StressCli& opt) {
+    cmd->add_option("--base", opt.base, "Content folder with the humanoid (af/, def/, models/)")->capture_default_str();
+    cmd->add_option(
+           "--methods", opt.methods,
+           "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp, +rest")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--scenarios", opt.scenarios, "Scenarios, comma-separated (default: all; --list names them)")
+        ->delimiter(',');
+    cmd->add_flag("--ci", opt.ci, "Only the scenarios CI runs as unit tests");
+    cmd->add_flag("--list", opt.list, "List the scenarios and exit");
+    cmd->add_option("--out", opt.out, "Output folder (created)")->capture_default_str();
+    cmd->add_option("--threads", opt.threads, "Worker threads (each run owns its world)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->add_option("--yaws", opt.yaws,
+                    "run each scenario at N orientations about the vertical (yaw k·360°/N); a cell reports how many "
+                    "passed")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    cmd->add_option("--precision", opt.precision, "Bullet build: float or double (default: this binary's)")
+        ->check(CLI::IsMember({"float", "double"}));
+}
+
+// The methods of --methods, each once; a spec that does not parse is a usage error.
+std::vector<sim::StressMethod> parseMethods(const std::vector<std::string>& specs) {
+    std::vector<sim::StressMethod> methods;
+    for (const std::string& spec : specs) {
+        std::string error;
+        auto m = sim::parseStressMethod(spec, error);
+        if (!m) usageError(error + methodSpecHint(spec));
+        for (const sim::StressMethod& other : methods)
+            if (other.label == m->label) usageError("method " + spec + " is listed twice");
+        methods.push_back(std::move(*m));
+    }
+    return methods;
+}
+
+// The scenarios of --scenarios and --ci (all when neither names one), each once; an unknown name is a usage error.
+std::vector<const sim::StressScenario*> pickScenarios(const StressCli& opt) {
+    std::vector<std::string> names = opt.scenarios;
+    if (opt.ci)
+        for (std::string_view n : sim::stressCiScenarios()) names.emplace_back(n);
+    std::vector<std::string> all;
+    for (const sim::StressScenario& s : sim::stressScenarios()) all.push_back(s.name);
+    if (names.empty()) names = all;
+    std::vector<const sim::StressScenario*> scenarios;
+    for (const std::string& n : names) {
+        const sim::StressScenario* s = sim::findStressScenario(n);
+        if (!s) usageError(unknownName("scenario", n, all) + " (afb stress --list describes them)");
+        if (std::find(scenarios.begin(), scenarios.end(), s) == scenarios.end()) scenarios.push_back(s);
+    }
+    return scenarios;
+}
+
+// The bundled humanoid when a scenario needs it and --base has it; its scenarios are skipped otherwise.
+sim::StressContent loadContent(const StressCli& opt, const std::vector<const sim::StressScenario*>& scenarios) {
+    sim::StressContent content;
+    bool needsHumanoid = false;
+    for (const sim::StressScenario* s : scenarios) needsHumanoid = needsHumanoid || s->needsHumanoid;
+    if (!needsHumanoid) return content;
+    text::Diagnostics diags;
+    if (auto lib = decl::Library::open(opt.base, diags))
+        if (auto loaded = figure::loadEntityFigure(*lib, "humanoid", {}, diags))
+            content.humanoid = std::move(loaded->figure);
+    if (!content.humanoid) {
+        printDiagnostics(diags);
+        std::cerr << "afb stress: warning: no humanoid in " << opt.base.string()
+                  << ": its scenarios are skipped (--base)\n";
+    }
+    return content;
+}
+
+// Each failing cell with its first failing run (the lowest yaw), then the count; every run is in stress.md.
+void printFailures(const std::vector<sim::StressResult>& results, int yaws) {
+    const std::vector<sim::StressCell> cells = sim::stressCells(results);
+    int failedCells = 0, failedRuns = 0;
+    for (const sim::StressCell& c : cells) {
+        if (c.skipped() || !c.firstFailure) continue;
+        ++failedCells;
+        failedRuns += c.total - c.passed;
+        const sim::StressResult& r = results[*c.firstFailure];
+        const std::string yaw = yaws == 1 ? std::string() : " (first at yaw " + fixedYaw(r.yawDeg) + "°)";
+        std::printf("  %s / %s%s: %s at %.3f s: %s\n", r.scenario.c_str(), r.method.c_str(), yaw.c_str(),
+                    std::string(sim::toString(r.cause)).c_str(), r.failedAtS.value_or(0), r.detail.c_str());
+    }
+    if (yaws == 1) std::printf("%d of %zu cells failed\n", failedCells, cells.size());
+    else
+        std::printf("%d of %zu cells failed at one yaw or more (%d of %zu runs)\n", failedCells, cells.size(),
+                    failedRuns, results.size());
+}
+
+int stressCommand(const StressCli& opt) {
+    const std::vector<sim::StressMethod> methods = parseMethods(opt.methods);
+    const std::vector<const sim::StressScenario*> scenarios = pickScenarios(opt);
+    if (methods.empty() || scenarios.empty()) usageError("no methods or no scenarios");
+    const sim::StressContent content = loadContent(opt, scenarios);
+    std::error_code ec;
+    std::filesystem::create_directories(opt.out, ec);
+    if (ec) {
+        std::cerr << "afb stress: cannot create " << opt.out.string() << ": " << ec.message() << "\n";
+        return kExitFailure;
+    }
+    std::printf("afb stress: Bullet %s (%s), %zu scenarios x %zu methods x %d yaw%s on %d threads into %s\n",
+                sim::bulletVersion().c_str(), sim::bulletPrecision(), scenarios.size(), methods.size(), opt.yaws,
+                opt.yaws == 1 ? "" : "s", opt.threads, opt.out.string().c_str());
+    std::fflush(stdout);
+    const bool tty = ::isatty(STDERR_FILENO) != 0;
+    const sim::StressThresholds thresholds;
+    const std::vector<sim::StressResult> results =
+        sim::runStressMatrix(scenarios, methods, content, thresholds, opt.threads, opt.yaws, [&](int done, int total) {
+            if (!tty) return;
+            std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
+            std::fflush(stderr);
+        });
+    std::ofstream(opt.out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
+    std::ofstream(opt.out / "stress.json") << sim::stressJson(results, methods, thresholds);
+    std::vector<std::string> scenarioNames;
+    for (const sim::StressScenario* s : scenarios) scenarioNames.push_back(s->name);
+    std::string plotError = writeHeatMap(opt.out, results, methods, scenarioNames);
+    if (plotError.empty()) plotError = runGnuplot(opt.out, "stress.gp");
+    std::printf("\n%s", sim::stressTable(results, methods).c_str());
+    printFailures(results, opt.yaws);
+    if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
+    std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", opt.out.string().c_str(),
+                plotError.empty() ? ",stress.png" : "");
+    return 0;
+}
+
 } // namespace
 
 void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
     auto* cmd = app.add_subcommand("stress", "Where methods fail: stress scenarios x methods, first failure per cell");
     cmd->footer("Writes into --out: stress.md (thresholds, the matrix, every failure and the worst values), "
                 "stress.json (the same, with every knob), stress.png (gnuplot heat map; stress.gp and stress.dat "
-                "redraw it). Exit code 0 even when cells fail (1 on bad arguments).\n"
+                "redraw it). Exit code 0 even when cells fail (2 on bad arguments).\n"
                 "Scenarios that use the bundled humanoid need --base (the repository root, or any content folder "
                 "with entity 'humanoid'); without it they are skipped.");
-    struct Options {
-        std::filesystem::path base = ".";
-        // Every preset, the multibody backend included. Every method is judged on its physics alone;
-        // default+rest is the default as the library spawns a ragdoll (SpawnOptions::comeToRest, the engine's rest
-        // rules), the verdict a game sees.
-        std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "iterative",
-                                            "default", "default+rest", "accurate", "multibody"};
-        std::vector<std::string> scenarios;
-        std::filesystem::path out = "stress";
-        int threads = 2;
-        int yaws = 1;
-        std::string precision;
-        bool list = false, ci = false;
-    };
-    auto opt = std::make_shared<Options>();
-    cmd->add_option("--base", opt->base, "Content folder with the humanoid (af/, def/, models/)")
-        ->capture_default_str();
-    cmd->add_option(
-           "--methods", opt->methods,
-           "Methods, comma-separated: NAME[:KNOB=VALUE]... as afb chart, then mitigations +stabilize, +clamp, +rest")
-        ->delimiter(',')
-        ->capture_default_str();
-    cmd->add_option("--scenarios", opt->scenarios, "Scenarios, comma-separated (default: all; --list names them)")
-        ->delimiter(',');
-    cmd->add_flag("--ci", opt->ci, "Only the scenarios CI runs as unit tests");
-    cmd->add_flag("--list", opt->list, "List the scenarios and exit");
-    cmd->add_option("--out", opt->out, "Output folder (created)")->capture_default_str();
-    cmd->add_option("--threads", opt->threads, "Worker threads (each run owns its world)")
-        ->check(CLI::Range(1, 256))
-        ->capture_default_str();
-    cmd->add_option("--yaws", opt->yaws,
-                    "run each scenario at N orientations about the vertical (yaw k·360°/N); a cell reports how many "
-                    "passed")
-        ->check(CLI::Range(1, 64))
-        ->capture_default_str();
-    cmd->add_option("--precision", opt->precision, "Bullet build: float or double (default: this binary's)")
-        ->check(CLI::IsMember({"float", "double"}));
+    auto opt = std::make_shared<StressCli>();
+    addStressOptions(cmd, *opt);
     cmd->callback([opt, &exitCode, argv] {
         if (opt->list) {
             for (const sim::StressScenario& s : sim::stressScenarios())
@@ -134,107 +246,10 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
         }
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
             execOtherPrecision(opt->precision, argv, "afb stress");
-            exitCode = 1;
+            exitCode = kExitFailure;
             return;
         }
-        std::vector<sim::StressMethod> methods;
-        for (const std::string& spec : opt->methods) {
-            std::string error;
-            auto m = sim::parseStressMethod(spec, error);
-            if (!m) {
-                std::cerr << "afb stress: " << error << "\n";
-                exitCode = 1;
-                return;
-            }
-            for (const sim::StressMethod& other : methods)
-                if (other.label == m->label) {
-                    std::cerr << "afb stress: method " << spec << " is listed twice\n";
-                    exitCode = 1;
-                    return;
-                }
-            methods.push_back(std::move(*m));
-        }
-        std::vector<const sim::StressScenario*> scenarios;
-        std::vector<std::string> names = opt->scenarios;
-        if (opt->ci)
-            for (std::string_view n : sim::stressCiScenarios()) names.emplace_back(n);
-        if (names.empty())
-            for (const sim::StressScenario& s : sim::stressScenarios()) names.push_back(s.name);
-        for (const std::string& n : names) {
-            const sim::StressScenario* s = sim::findStressScenario(n);
-            if (!s) {
-                std::cerr << "afb stress: unknown scenario " << n << " (afb stress --list names them)\n";
-                exitCode = 1;
-                return;
-            }
-            if (std::find(scenarios.begin(), scenarios.end(), s) == scenarios.end()) scenarios.push_back(s);
-        }
-        if (methods.empty() || scenarios.empty()) {
-            std::cerr << "afb stress: no methods or no scenarios\n";
-            exitCode = 1;
-            return;
-        }
-
-        sim::StressContent content;
-        bool needsHumanoid = false;
-        for (const sim::StressScenario* s : scenarios) needsHumanoid = needsHumanoid || s->needsHumanoid;
-        if (needsHumanoid) {
-            text::Diagnostics diags;
-            if (auto lib = decl::Library::open(opt->base, diags))
-                if (auto loaded = figure::loadEntityFigure(*lib, "humanoid", {}, diags))
-                    content.humanoid = std::move(loaded->figure);
-            if (!content.humanoid) {
-                printDiagnostics(diags);
-                std::cerr << "afb stress: warning: no humanoid in " << opt->base.string()
-                          << ": its scenarios are skipped (--base)\n";
-            }
-        }
-        std::error_code ec;
-        std::filesystem::create_directories(opt->out, ec);
-        if (ec) {
-            std::cerr << "afb stress: cannot create " << opt->out.string() << ": " << ec.message() << "\n";
-            exitCode = 1;
-            return;
-        }
-        std::printf("afb stress: Bullet %s (%s), %zu scenarios x %zu methods x %d yaw%s on %d threads into %s\n",
-                    sim::bulletVersion().c_str(), sim::bulletPrecision(), scenarios.size(), methods.size(), opt->yaws,
-                    opt->yaws == 1 ? "" : "s", opt->threads, opt->out.string().c_str());
-        std::fflush(stdout);
-        const bool tty = ::isatty(STDERR_FILENO) != 0;
-        const sim::StressThresholds thresholds;
-        const std::vector<sim::StressResult> results =
-            sim::runStressMatrix(scenarios, methods, content, thresholds, opt->threads, opt->yaws,
-                                 [&](int done, int total) {
-                                     if (!tty) return;
-                                     std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
-                                     std::fflush(stderr);
-                                 });
-        std::ofstream(opt->out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
-        std::ofstream(opt->out / "stress.json") << sim::stressJson(results, methods, thresholds);
-        std::vector<std::string> scenarioNames;
-        for (const sim::StressScenario* s : scenarios) scenarioNames.push_back(s->name);
-        std::string plotError = writeHeatMap(opt->out, results, methods, scenarioNames);
-        if (plotError.empty()) plotError = runGnuplot(opt->out, "stress.gp");
-        std::printf("\n%s", sim::stressTable(results, methods).c_str());
-        // Each failing cell with its first failing run (the lowest yaw); every run is in stress.md.
-        const std::vector<sim::StressCell> cells = sim::stressCells(results);
-        int failedCells = 0, failedRuns = 0;
-        for (const sim::StressCell& c : cells) {
-            if (c.skipped() || !c.firstFailure) continue;
-            ++failedCells;
-            failedRuns += c.total - c.passed;
-            const sim::StressResult& r = results[*c.firstFailure];
-            const std::string yaw = opt->yaws == 1 ? std::string() : " (first at yaw " + fixedYaw(r.yawDeg) + "°)";
-            std::printf("  %s / %s%s: %s at %.3f s: %s\n", r.scenario.c_str(), r.method.c_str(), yaw.c_str(),
-                        std::string(sim::toString(r.cause)).c_str(), r.failedAtS.value_or(0), r.detail.c_str());
-        }
-        if (opt->yaws == 1) std::printf("%d of %zu cells failed\n", failedCells, cells.size());
-        else
-            std::printf("%d of %zu cells failed at one yaw or more (%d of %zu runs)\n", failedCells, cells.size(),
-                        failedRuns, results.size());
-        if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
-        std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", opt->out.string().c_str(),
-                    plotError.empty() ? ",stress.png" : "");
+        exitCode = stressCommand(*opt);
     });
 }
 

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "afb/decl/Library.h"
 #include "afb/text/Diagnostics.h"
 
 namespace afb::cli {
@@ -33,6 +34,12 @@ void addGenCommand(CLI::App& app, int& exitCode);
 /// "afb-double" for double) with the same arguments: the two builds cannot share a process. Returns only when
 /// that fails, after printing why (`command` names the caller in the message).
 void execOtherPrecision(const std::string& precision, char** argv, const char* command);
+
+/// Checks that every name in `entities` is an entityDef of `library`; each that is not is an error in
+/// `diagnostics` naming the closest entityDef there. Commands check their entities with it before they print or
+/// run anything.
+bool findEntities(const decl::Library& library, const std::vector<std::string>& entities,
+                  text::Diagnostics& diagnostics);
 
 /// Prints every diagnostic to stderr as `file:line:col: error: message`.
 void printDiagnostics(const text::Diagnostics& diagnostics);

@@ -18,10 +18,16 @@ struct MethodOptions {
     std::vector<std::string> overrides; ///< per knob (methodKnobs() order); empty: not given
 };
 
-/// Registers --method and the knob flags on `cmd`; `options` must outlive the parse.
+/// Registers --method and the knob flags on `cmd`; `options` must outlive the parse. An unknown method and a knob
+/// value the knob does not take are refused by the parse.
 void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& options);
 
-/// The preset with the overrides applied, or nullopt with `error` set.
-std::optional<bullet::Method> resolveMethod(const MethodOptions& options, std::string& error);
+/// The preset with the overrides applied; a combination the method cannot run (a knob the raw method lacks) is a
+/// usage error (usageError).
+bullet::Method resolveMethod(const MethodOptions& options);
+
+/// For a method spec of afb chart and afb stress (NAME[:KNOB=VALUE]...[+MITIGATION]...) that did not parse: "; did
+/// you mean 'X'?" for its first misspelt name, method, knob or mitigation, or an empty string.
+std::string methodSpecHint(std::string_view spec);
 
 } // namespace afb::cli

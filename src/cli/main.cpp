@@ -4,6 +4,7 @@
 #include <LinearMath/btScalar.h>
 
 #include "Commands.h"
+#include "Usage.h"
 #include "afb/Version.h"
 
 #ifndef AFB_BUILD_TYPE
@@ -31,7 +32,9 @@ std::string versionLine() {
 int main(int argc, char** argv) {
     CLI::App app{"afb — Doom 3 articulated figures (.af) on Bullet: parse, format, resolve, inspect, drop, "
                  "golden, draw, chart, stress, gen.\n"
-                 "Diagnostics go to stderr as file:line:col: error: message; exit code 1 on any error."};
+                 "Diagnostics go to stderr as file:line:col: error: message. Exit code 0 on success, 1 on a failed "
+                 "check or bad input, 2 on a command line that makes no sense. A report written to '-' goes to "
+                 "stdout alone; the human text goes to stderr then."};
     app.require_subcommand(1);
     app.set_version_flag("--version", versionLine());
     int exitCode = 0;
@@ -45,6 +48,10 @@ int main(int argc, char** argv) {
     afb::cli::addChartCommand(app, exitCode, argv);
     afb::cli::addStressCommand(app, exitCode, argv);
     afb::cli::addGenCommand(app, exitCode);
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return afb::cli::reportParseError(app, e);
+    }
     return exitCode;
 }

@@ -62,7 +62,7 @@ afb_cli_test(drop_entity_rows 0 ARGS drop --base . humanoid humanoid_sleeping --
 # afb drop --lod: the humanoid at six rigid bodies, recorded in the report; refused where it cannot apply.
 afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
              MATCH "6 rigid bodies for 15 bodies" "\"lod_bodies\": 6" "\"lod\": 6")
-afb_cli_test(drop_lod_raw 1 ARGS drop --base . humanoid --steps 1 --lod 6 --method raw MATCH "--lod needs the rigid")
+afb_cli_test(drop_lod_raw 2 ARGS drop --base . humanoid --steps 1 --lod 6 --method raw MATCH "--lod needs the rigid")
 afb_cli_test(drop_lod_help 0 ARGS drop --help MATCH "--lod")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
 
@@ -79,7 +79,7 @@ add_test(NAME cli.draw_humanoid
           -P ${CMAKE_CURRENT_LIST_DIR}/draw.cmake)
 afb_cli_test(draw_views 0 ARGS draw --base . chain --view top,front --show bodies,joints
              --out ${CMAKE_CURRENT_BINARY_DIR}/draw_chain.svg MATCH "chain \\(load pose\\)")
-afb_cli_test(draw_bad_extension 1 ARGS draw --base . chain --out ${CMAKE_CURRENT_BINARY_DIR}/chain.jpg
+afb_cli_test(draw_bad_extension 2 ARGS draw --base . chain --out ${CMAKE_CURRENT_BINARY_DIR}/chain.jpg
              MATCH "must be a .png or .svg file")
 afb_cli_test(draw_unknown 1 ARGS draw --base . no_such_entity --out ${CMAKE_CURRENT_BINARY_DIR}/none.png
              MATCH "no_such_entity")
@@ -92,9 +92,9 @@ add_test(NAME cli.drop_gltf
           "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/drop_gltf"
           -P ${CMAKE_CURRENT_LIST_DIR}/gltf.cmake)
 set_tests_properties(cli.drop_gltf PROPERTIES SKIP_REGULAR_EXPRESSION "validation skipped")
-afb_cli_test(drop_gltf_extension 1 ARGS drop --base . chain --steps 1 --gltf ${CMAKE_CURRENT_BINARY_DIR}/chain.gltf
+afb_cli_test(drop_gltf_extension 2 ARGS drop --base . chain --steps 1 --gltf ${CMAKE_CURRENT_BINARY_DIR}/chain.gltf
              MATCH "--gltf must name a .glb file")
-afb_cli_test(drop_gltf_one_entity 1 ARGS drop --base . chain humanoid --steps 1
+afb_cli_test(drop_gltf_one_entity 2 ARGS drop --base . chain humanoid --steps 1
              --gltf ${CMAKE_CURRENT_BINARY_DIR}/two.glb MATCH "--gltf records one entity")
 afb_cli_test(drop_gltf_unwritable 1 ARGS drop --base . chain --steps 1
              --gltf ${CMAKE_CURRENT_BINARY_DIR}/no/such/folder/chain.glb MATCH "assimp could not write")
@@ -105,21 +105,72 @@ add_test(NAME cli.chart_matrix
   COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DCHECK=$<TARGET_FILE:afb_picture_check>"
           "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/chart_matrix" "-DGNUPLOT=${AFB_GNUPLOT}"
           -P ${CMAKE_CURRENT_LIST_DIR}/chart.cmake)
-afb_cli_test(chart_unknown_method 1 ARGS chart --base . chain --methods raw,nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
+afb_cli_test(chart_unknown_method 2 ARGS chart --base . chain --methods raw,nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
              MATCH "unknown method nonsense")
-afb_cli_test(chart_raw_technique 1 ARGS chart --base . chain --methods raw:position-iterations=2
+afb_cli_test(chart_raw_technique 2 ARGS chart --base . chain --methods raw:position-iterations=2
              --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "raw \\(plain Bullet\\) has no position-iterations")
 # afb stress: a 2 × 2 matrix, its table, Markdown, JSON and heat map; bad names.
 add_test(NAME cli.stress_matrix
   COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DCHECK=$<TARGET_FILE:afb_picture_check>"
           "-DSRC=${PROJECT_SOURCE_DIR}" "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/stress_matrix" "-DGNUPLOT=${AFB_GNUPLOT}"
           -P ${CMAKE_CURRENT_LIST_DIR}/stress.cmake)
-afb_cli_test(stress_unknown_scenario 1 ARGS stress --scenarios nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
-             MATCH "unknown scenario nonsense")
+afb_cli_test(stress_unknown_scenario 2 ARGS stress --scenarios nonsense --out ${CMAKE_CURRENT_BINARY_DIR}/x
+             MATCH "unknown scenario 'nonsense'")
 afb_cli_test(stress_list 0 ARGS stress --list MATCH "humanoid-pile-160")
 afb_cli_test(drop_raw 0 ARGS drop --base . chain --seconds 1 --method raw MATCH "method raw \\(" "chain")
-afb_cli_test(drop_raw_technique 1 ARGS drop --base . chain --method raw --speculative-limits on
+afb_cli_test(drop_raw_technique 2 ARGS drop --base . chain --method raw --speculative-limits on
              MATCH "has no speculative-limits")
+
+# Reports on stdout: `--json -` and `--csv -` leave stdout to the document alone (parsed and checked).
+add_test(NAME cli.drop_report_stdout
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/drop_report_stdout" -P ${CMAKE_CURRENT_LIST_DIR}/streams.cmake)
+# Exit codes: 0 success, 1 a failed check or bad input, 2 a command line that makes no sense; misspelt names get
+# the nearest valid one.
+afb_cli_test(exit_success 0 ARGS drop --base . chain --steps 5 MATCH "chain +10 +5 ")
+afb_cli_test(usage_unknown_command 2 ARGS dorp MATCH "^afb: unknown command 'dorp'; did you mean 'drop'\\?")
+afb_cli_test(usage_unknown_subcommand 2 ARGS golden recrod x.json
+             MATCH "afb golden: unknown command 'recrod'; did you mean 'record'\\?")
+afb_cli_test(usage_no_command 2 MATCH "afb: no command given \\(parse, fmt, ")
+afb_cli_test(usage_unknown_option 2 ARGS drop --base . chain --bogus-flag
+             MATCH "afb drop: unknown option '--bogus-flag'")
+afb_cli_test(usage_misspelt_option 2 ARGS drop --base . chain --coutn 2 MATCH "did you mean '--count'\\?")
+afb_cli_test(usage_missing_value 2 ARGS drop --base . chain --json MATCH "afb drop: --json")
+afb_cli_test(usage_count_zero 2 ARGS drop --base . chain --count 0 MATCH "afb drop: --count: Value 0 not in range")
+afb_cli_test(usage_count_negative 2 ARGS drop --base . chain --count -3 MATCH "--count: Value -3 not in range")
+afb_cli_test(usage_count_text 2 ARGS drop --base . chain --count many MATCH "--count")
+afb_cli_test(usage_height_negative 2 ARGS drop --base . chain --height -1 MATCH "--height: Value -1 is not")
+afb_cli_test(usage_hz_zero 2 ARGS drop --base . chain --hz 0 MATCH "--hz: Value 0 is not a positive number")
+afb_cli_test(usage_hz_nan 2 ARGS drop --base . chain --hz nan MATCH "--hz: Value nan is not")
+afb_cli_test(usage_seconds_negative 2 ARGS drop --base . chain --seconds -2 MATCH "--seconds: Value -2 is not")
+afb_cli_test(usage_too_many_steps 2 ARGS drop --base . chain --seconds 1e9 --hz 1000
+             MATCH "--seconds 1e\\+?0*9 at --hz 1000: more steps than a run can count")
+afb_cli_test(usage_steps_negative 2 ARGS drop --base . chain --steps -1 MATCH "--steps")
+afb_cli_test(usage_method_misspelt 2 ARGS drop --base . chain --method defualt
+             MATCH "unknown method 'defualt'; did you mean 'default'\\?")
+afb_cli_test(usage_knob_value 2 ARGS drop --base . chain --substeps lots MATCH "--substeps: Value lots: not an integer")
+afb_cli_test(usage_golden_hz 2 ARGS golden record --base . chain --out ${CMAKE_CURRENT_BINARY_DIR}/x.json --hz -60
+             MATCH "afb golden record: --hz: Value -60 is not a positive number")
+afb_cli_test(usage_draw_height 2 ARGS draw --base . chain --out ${CMAKE_CURRENT_BINARY_DIR}/x.png --height -1
+             MATCH "afb draw: --height")
+afb_cli_test(usage_chart_heights 2 ARGS chart --base . chain --heights 1,-1 --out ${CMAKE_CURRENT_BINARY_DIR}/x
+             MATCH "--heights: Value -1 is not in \\[0 - 10000\\]")
+afb_cli_test(usage_chart_method_misspelt 2 ARGS chart --base . chain --methods raw,defualt
+             --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "did you mean 'default'\\?")
+afb_cli_test(usage_chart_knob_misspelt 2 ARGS chart --base . chain --methods raw:substep=2
+             --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "did you mean 'substeps'\\?")
+afb_cli_test(usage_stress_scenario_misspelt 2 ARGS stress --scenarios tiny-bodie --out ${CMAKE_CURRENT_BINARY_DIR}/x
+             MATCH "unknown scenario 'tiny-bodie'; did you mean 'tiny-bodies'\\?")
+afb_cli_test(usage_stress_mitigation_misspelt 2 ARGS stress --methods default+stabilise --scenarios tiny-bodies
+             --out ${CMAKE_CURRENT_BINARY_DIR}/x MATCH "did you mean 'stabilize'\\?")
+afb_cli_test(usage_inspect_af_alone 2 ARGS inspect --af af/chain.af MATCH "--af needs --mesh and --pose")
+afb_cli_test(drop_entity_misspelt 1 ARGS drop --base . humanoidd
+             MATCH "entityDef 'humanoidd' not found; did you mean 'humanoid'\\?")
+afb_cli_test(resolve_entity_misspelt 1 ARGS resolve --base . chian MATCH "did you mean 'chain'\\?")
+afb_cli_test(inspect_entity_misspelt 1 ARGS inspect --base . --json lampp MATCH "did you mean 'lamp'\\?")
+afb_cli_test(golden_not_a_golden_file 1 ARGS golden compare README.md MATCH "README.md: error: not a golden file")
+afb_cli_test(help_exit 0 ARGS drop --help MATCH "--count INT:INT in \\[1 - 1048576\\]" "--hz FLOAT:POSITIVE"
+             "--substeps INT" "--split-impulse on\\|off")
 
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)

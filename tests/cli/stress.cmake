@@ -85,11 +85,11 @@ foreach(c RANGE 3)
   endif()
 endforeach()
 
-# Out of 1..64: refused by the option's check (CLI11's exit code for a bad value), nothing run.
+# Out of 1..64: refused by the option's check as a usage error (exit 2), nothing run.
 foreach(bad 0 65)
   execute_process(COMMAND ${AFB} stress --yaws ${bad} --out ${TMP}/bad RESULT_VARIABLE rc OUTPUT_VARIABLE out
                   ERROR_VARIABLE err)
-  if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "--yaws: Value ${bad} not in range 1 to 64" OR EXISTS ${TMP}/bad)
+  if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "--yaws: Value ${bad} not in range 1 to 64" OR EXISTS ${TMP}/bad)
     message(FATAL_ERROR "afb stress --yaws ${bad}: exit ${rc}, expected a refusal:\n${out}${err}")
   endif()
 endforeach()
