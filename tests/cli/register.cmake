@@ -181,7 +181,7 @@ if(TARGET afb_gen_content)
 endif()
 
 # The smoke matrix (cmake/smoke.sh): every afb command x every preset x the options that change code paths, in short
-# runs; each must end with exit 0 or 1, never by a signal.
+# runs; each must end with exit 0, 1 or 2, never by a signal.
 add_test(NAME smoke.matrix
   COMMAND bash ${PROJECT_SOURCE_DIR}/cmake/smoke.sh $<TARGET_FILE:afb> ${CMAKE_CURRENT_BINARY_DIR}/smoke
   WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
