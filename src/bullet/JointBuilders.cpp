@@ -58,8 +58,8 @@ JointParts ballJoint(detail::ObjectArena& arena, const FigureConstraint& c, cons
     if (policy.limits.speculative) {
         // Our own cone row (speculative); the anchor alone is a point-to-point.
         out.main = arena.make<btPoint2PointConstraint>(s.a, s.b, s.frameInA.getOrigin(), s.frameInB.getOrigin());
-        out.limit = arena.make<DirectionLimitConstraint>(s.a, s.b, shaftA, frameBRot, LimitShape::Cone, h,
-                                                         btScalar(0), policy.limits);
+        out.limit = arena.make<DirectionLimitConstraint>(s.a, s.b, shaftA, frameBRot, LimitShape::Cone, h, btScalar(0),
+                                                         policy.limits);
         return out;
     }
     const btTransform bWorld = s.b.getCenterOfMassTransform();

@@ -89,7 +89,8 @@ inline void applyAngular(Side& a, Side& b, const btVector3& l) {
 }
 
 // Solves the 2×2 system [n1 n2]ᵀ K [n1 n2] λ = rhs and returns [n1 n2] λ (zero when singular).
-inline btVector3 solveTwoRows(const btMatrix3x3& k, const btVector3& n1, const btVector3& n2, btScalar r1, btScalar r2) {
+inline btVector3 solveTwoRows(const btMatrix3x3& k, const btVector3& n1, const btVector3& n2, btScalar r1,
+                              btScalar r2) {
     const btScalar k11 = n1.dot(k * n1), k12 = n1.dot(k * n2), k22 = n2.dot(k * n2);
     const btScalar det = k11 * k22 - k12 * k12;
     if (det <= SIMD_EPSILON * (k11 * k22 + SIMD_EPSILON)) return {0, 0, 0};
