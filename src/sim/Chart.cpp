@@ -326,14 +326,15 @@ std::string chartSummaryMarkdown(const std::vector<ChartPoint>& points, const Ch
         for (const ChartPoint& p : mine)
             if (p.exploded) exploded += (exploded.empty() ? "" : ", ") + ("`" + p.label + "`");
         if (!exploded.empty()) out << "\nExploded (not on any front): " << exploded << ".\n";
-        const std::optional<std::size_t> cheapest = cheapestWithin(mine, bounds);
-        if (bounds.any())
-            out << "\nCheapest within " << boundsText(bounds) << ": "
-                << (cheapest ? "`" + mine[*cheapest].label + "`" : std::string("none of the methods charted")) << ".\n";
-        else
-            out << "\nCheapest that does not explode: "
-                << (cheapest ? "`" + mine[*cheapest].label + "`" : std::string("none")) << " (give bounds with "
-                << "--max-anchor-error, --max-limit-error, --max-penetration, --max-settle-time).\n";
+        // Only a method inside the bounds it names is recommended; with none given, the defaults, said so.
+        const ChartBounds within = bounds.any() ? bounds : ChartBounds::defaults();
+        const std::optional<std::size_t> cheapest = cheapestWithin(mine, within);
+        out << "\nCheapest within " << boundsText(within)
+            << (bounds.any() ? std::string()
+                             : " (the default bounds; set others with --max-anchor-error, --max-limit-error, "
+                               "--max-penetration, --max-settle-time)")
+            << ": " << (cheapest ? "`" + mine[*cheapest].label + "`" : std::string("none of the methods charted"))
+            << ".\n";
     }
     return out.str();
 }

@@ -94,6 +94,30 @@ TEST_CASE("chart: the cheapest method within bounds", "[sim][chart]") {
     CHECK(sim::cheapestWithin(points, mixed) == 3u);
 }
 
+TEST_CASE("chart: the summary recommends only a method inside the bounds it names", "[sim][chart]") {
+    // raw is the cheapest that does not explode but is far off at the joints; fast is within the default bounds
+    // (10 mm, 5°, 20 mm) only in anchor; exact is within all of them.
+    const std::vector<ChartPoint> points = {
+        point("raw", 1.0, 98, 34, 25, std::nullopt),
+        point("fast", 2.0, 9, 14, 25, 3.0),
+        point("exact", 5.0, 0.1, 0.2, 5, 2.0),
+    };
+    const sim::ChartOptions options;
+    const std::string given = sim::chartSummaryMarkdown(points, options, {}, 3);
+    CHECK_THAT(given, Catch::Contains("Cheapest within anchor ≤ 10 mm, limit ≤ 5°, penetration ≤ 20 mm (the default "
+                                      "bounds; set others with --max-anchor-error"));
+    CHECK_THAT(given, Catch::Contains("): `exact`."));
+    CHECK_THAT(given, !Catch::Contains("does not explode"));
+    sim::ChartBounds loose;
+    loose.anchorM = 0.2;
+    const std::string wide = sim::chartSummaryMarkdown(points, options, loose, 3);
+    CHECK_THAT(wide, Catch::Contains("Cheapest within anchor ≤ 200 mm: `raw`."));
+    sim::ChartBounds tight;
+    tight.anchorM = 0.00001;
+    CHECK_THAT(sim::chartSummaryMarkdown(points, options, tight, 3),
+               Catch::Contains("Cheapest within anchor ≤ 0.01 mm: none of the methods charted."));
+}
+
 TEST_CASE("chart: points fold runs into median cost and worst errors", "[sim][chart]") {
     std::vector<sim::ChartRun> runs;
     // Method "m" on figure 0: two heights × three repeats. Cost per repeat = (sum of CPU ms) / (sum of body-steps).

@@ -38,8 +38,8 @@ enum class RotationHold : std::uint8_t { None, Twist, AllButAxis, All };
 /// The relative motions a joint type forbids: every layer that treats joint types alike (the rigid and multibody
 /// backends, the position pass, the pruning of self-collision pairs) reads them here.
 struct JointFreedom {
-    AnchorHold anchor;
-    RotationHold rotation;
+    AnchorHold anchor;     ///< what the two anchors are held to
+    RotationHold rotation; ///< which relative rotations are forbidden
 };
 
 /// The freedoms of a joint type (JointFreedom).

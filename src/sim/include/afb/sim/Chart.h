@@ -99,6 +99,9 @@ std::vector<std::size_t> chartFront(const std::vector<ChartPoint>& points, const
 struct ChartBounds {
     std::optional<double> anchorM, limitDeg, penetrationM, settleS;
     bool any() const { return anchorM || limitDeg || penetrationM || settleS; }
+    /// The bounds a summary recommends within when none are given: joints open at most 10 mm, limits overshot at
+    /// most 5°, contacts at most 20 mm deep (what a game shows without visible artefacts on a human-sized figure).
+    static ChartBounds defaults() { return {0.010, 5.0, 0.020, std::nullopt}; }
 };
 
 /// The index of the cheapest point (lowest median cost) of `points` that has a cost, did not explode and meets every
@@ -110,7 +113,7 @@ std::string chartRunsCsv(const std::vector<ChartRun>& runs);
 
 /// summary.md: the setup, then per figure a table of every method (members of the all-errors front marked), that
 /// front, the front of each panel (cost and one error), the methods that exploded, and the cheapest method
-/// within `bounds`.
+/// within `bounds` (ChartBounds::defaults() when `bounds` sets none, and then said so), or that none is.
 std::string chartSummaryMarkdown(const std::vector<ChartPoint>& points, const ChartOptions& options,
                                  const ChartBounds& bounds, std::size_t runs);
 
