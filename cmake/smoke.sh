@@ -40,6 +40,8 @@ run inspect "$afb" inspect --json --base . buggy
 run draw-png "$afb" draw --base . humanoid --out "$work/humanoid.png"
 run draw-svg "$afb" draw --base . lamp --out "$work/lamp.svg"
 run gen "$afb" gen models/md5/humanoid/humanoid.md5mesh --out "$work/gen" --json
+run methods "$afb" methods
+run methods-json "$afb" methods raw --json
 
 # afb drop: every preset with each option that takes another path through the code.
 drop_options=(

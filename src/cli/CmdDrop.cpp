@@ -30,7 +30,7 @@ struct DropCli {
     std::string json, csv;
     std::filesystem::path gltf;
     double gravity = 9.81;
-    bool doomGravity = false, noSleep = false, strict = false;
+    bool doomGravity = false, noSleep = false, strict = false, verbose = false;
     std::optional<int> worlds;
 };
 
@@ -67,6 +67,7 @@ void addDropOptions(CLI::App* cmd, DropCli& opt) {
         ->check(CLI::IsMember({"float", "double"}));
     cmd->add_flag("--strict", opt.strict, "Refuse values the builder would repair (README: hostile numbers)");
     cmd->add_flag("--no-sleep", opt.noSleep, "Never put figures to rest (the rest rules are off)");
+    cmd->add_flag("--verbose", opt.verbose, "Print every knob of the method (JSON and CSV reports always have them)");
     cmd->add_flag("--stop-at-rest", opt.drop.stopAtRest, "End a run when every instance is at rest");
     cmd->add_flag("--doom-gravity", opt.doomGravity, "Doom's gravity, 1066 units/s² (27.1 m/s²), instead of 9.81");
     cmd->add_option("--json", opt.json,
@@ -116,8 +117,8 @@ void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, con
     for (std::size_t i = 0; i < results.size(); ++i) {
         const sim::DropResult& r = results[i];
         std::fprintf(out, "%-32s %6d %7d %9.1f %9.2f %10lld %9.4f %9.2f %9.4f %9.4f %9.3f %8s %8s\n", labels[i].c_str(),
-                     r.bodies, r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps, r.maxAnchorErrorM,
-                     r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
+                     r.bodies / std::max(1, count), r.steps, r.usPerStep, r.usPerBodyStep, r.awakeBodySteps,
+                     r.maxAnchorErrorM, r.maxLimitViolationDeg, r.maxPenetrationM, r.restPenetrationM, r.maxEnergyGainJ,
                      r.nonFinite  ? "NaN"
                      : r.exploded ? "YES"
                                   : "no",
@@ -129,6 +130,10 @@ void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, con
                          r.worstAnchorJoint.empty() ? "-" : r.worstAnchorJoint.c_str(),
                          r.worstLimitJoint.empty() ? "-" : r.worstLimitJoint.c_str(),
                          r.worstContact.empty() ? "-" : r.worstContact.c_str());
+    std::fprintf(out, "  (bodies: per instance; us/step, us/body: CPU µs per step and per awake body-step; awake: "
+                      "body-steps awake;\n   anchor m, limit deg, pen. m: worst joint gap, limit overshoot, contact "
+                      "depth; rest m: deepest contact\n   in the last second; gain J: largest energy gain; settle s: "
+                      "all instances at rest; every field: --help)\n");
     for (std::size_t i = 0; i < results.size(); ++i)
         if (const sim::DropResult& r = results[i]; r.lodBodies)
             std::fprintf(out, "  %s: level of detail, %d rigid bodies for %d bodies per instance\n", labels[i].c_str(),
@@ -186,9 +191,14 @@ int runDrops(DropCli& opt, const bullet::Method& method) {
     if (!figures) return kExitFailure;
     // With a report on stdout, stdout holds only that report.
     std::FILE* text = opt.json == "-" || opt.csv == "-" ? stderr : stdout;
+    // The method as chart and stress spell it (the preset and the knobs set on it); every knob with --verbose.
+    const std::string methodLine =
+        opt.verbose
+            ? bullet::describe(opt.drop.method)
+            : methodSpec(opt.drop.method) + " (every knob: --verbose, or afb methods " + opt.drop.method.name + ")";
     std::fprintf(text, "afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
                  sim::bulletVersion().c_str(), sim::bulletPrecision(), opt.drop.hz, opt.drop.sleeping ? "on" : "off",
-                 units.gravityMps2, bullet::describe(opt.drop.method).c_str());
+                 units.gravityMps2, methodLine.c_str());
     if (opt.drop.lod)
         std::fprintf(text, "  level of detail: --lod %d (automatic merge; each figure's rigid bodies below)\n",
                      *opt.drop.lod);
@@ -226,7 +236,9 @@ int runDrops(DropCli& opt, const bullet::Method& method) {
 } // namespace
 
 void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
-    auto* cmd = app.add_subcommand("drop", "Drop figures onto a ground plane and report speed, accuracy and stability");
+    auto* cmd = app.add_subcommand("drop", "Drop figures onto a ground plane and report speed, accuracy and stability\n"
+                                           "Examples:\n  afb drop --base . humanoid\n"
+                                           "  afb drop --base . humanoid --method fast --count 4 --height 10 --json -");
     cmd->footer(sim::dropFieldsHelp());
     auto opt = std::make_shared<DropCli>();
     addDropOptions(cmd, *opt);

@@ -27,6 +27,9 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv);
 /// Registers `afb stress`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
 void addStressCommand(CLI::App& app, int& exitCode, char** argv);
 
+/// Registers `afb methods`.
+void addMethodsCommand(CLI::App& app, int& exitCode);
+
 /// Registers `afb gen`.
 void addGenCommand(CLI::App& app, int& exitCode);
 

@@ -22,20 +22,6 @@ std::vector<std::string> knobNames() {
     return names;
 }
 
-// The values a knob takes, as --help shows them: INT, FLOAT, on|off, or the names of an enum.
-std::string knobType(const bullet::MethodKnob& knob) {
-    return std::visit(
-        [](auto field) -> std::string {
-            using Field = decltype(field);
-            if constexpr (std::is_same_v<Field, int bullet::Method::*>) return "INT";
-            else if constexpr (std::is_same_v<Field, double bullet::Method::*>) return "FLOAT";
-            else if constexpr (std::is_same_v<Field, bool bullet::Method::*>) return "on|off";
-            else if constexpr (std::is_same_v<Field, bullet::CcdPolicy bullet::Method::*>) return "off|fast-bodies";
-            else return "rigid|multibody";
-        },
-        knob.field);
-}
-
 // Refuses at parse time a value the knob does not take (setKnob's own check, on a scratch method).
 CLI::Validator knobCheck(const bullet::MethodKnob* knob) {
     return CLI::Validator(
@@ -60,11 +46,26 @@ CLI::Validator presetCheck() {
 
 } // namespace
 
+std::string knobType(const bullet::MethodKnob& knob) {
+    return std::visit(
+        [](auto field) -> std::string {
+            using Field = decltype(field);
+            if constexpr (std::is_same_v<Field, int bullet::Method::*>) return "INT";
+            else if constexpr (std::is_same_v<Field, double bullet::Method::*>) return "FLOAT";
+            else if constexpr (std::is_same_v<Field, bool bullet::Method::*>) return "on|off";
+            else if constexpr (std::is_same_v<Field, bullet::CcdPolicy bullet::Method::*>) return "off|fast-bodies";
+            else return "rigid|multibody";
+        },
+        knob.field);
+}
+
 void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& options) {
     std::string presets;
     for (std::string_view p : sim::methodNames()) presets += (presets.empty() ? "" : ", ") + std::string(p);
     cmd->add_option("--method", options->preset,
-                    "How figures are simulated: " + presets + " (docs/methods.md; raw: plain Bullet, the reference)")
+                    "How figures are simulated: " + presets +
+                        " (raw: plain Bullet, the reference). --KNOB VALUE overrides one knob of it: `afb methods` "
+                        "lists the methods and every knob")
         ->type_name("NAME")
         ->check(presetCheck())
         ->capture_default_str();
@@ -77,7 +78,17 @@ void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& optio
                             " (overrides the method's; default method: " + bullet::knobValue(base, knobs[i]) + ")")
             ->type_name(knobType(knobs[i]))
             ->check(knobCheck(&knobs[i]))
-            ->group("Method knobs");
+            ->group("Method knobs (afb methods: values, defaults, meaning)");
+}
+
+std::string methodSpec(const bullet::Method& m) {
+    std::string spec = m.name;
+    const auto preset = sim::methodByName(m.name);
+    if (!preset) return bullet::describe(m);
+    for (const bullet::MethodKnob& k : bullet::methodKnobs())
+        if (const std::string v = bullet::knobValue(m, k); v != bullet::knobValue(*preset, k))
+            spec += ":" + std::string(k.name) + "=" + v;
+    return spec;
 }
 
 bullet::Method resolveMethod(const MethodOptions& options) {

@@ -22,6 +22,13 @@ struct MethodOptions {
 /// value the knob does not take are refused by the parse.
 void addMethodOptions(CLI::App* cmd, const std::shared_ptr<MethodOptions>& options);
 
+/// The values a knob takes, as help and `afb methods` show them: INT, FLOAT, on|off, or the names of an enum.
+std::string knobType(const bullet::MethodKnob& knob);
+
+/// `m` as afb chart and afb stress spell a method: its preset's name, then `:KNOB=VALUE` for each knob whose value
+/// differs from the preset's ("fast:iterations=8").
+std::string methodSpec(const bullet::Method& m);
+
 /// The preset with the overrides applied; a combination the method cannot run (a knob the raw method lacks) is a
 /// usage error (usageError).
 bullet::Method resolveMethod(const MethodOptions& options);

@@ -170,7 +170,20 @@ afb_cli_test(resolve_entity_misspelt 1 ARGS resolve --base . chian MATCH "did yo
 afb_cli_test(inspect_entity_misspelt 1 ARGS inspect --base . --json lampp MATCH "did you mean 'lamp'\\?")
 afb_cli_test(golden_not_a_golden_file 1 ARGS golden compare README.md MATCH "README.md: error: not a golden file")
 afb_cli_test(help_exit 0 ARGS drop --help MATCH "--count INT:INT in \\[1 - 1048576\\]" "--hz FLOAT:POSITIVE"
-             "--substeps INT" "--split-impulse on\\|off")
+             "afb drop --base \\. humanoid --method fast" "--substeps INT" "--split-impulse on\\|off")
+# afb methods: every method with its summary and every knob with its values and default; one method's knobs, those
+# that differ from the default marked; JSON; a misspelt method.
+afb_cli_test(methods_list 0 ARGS methods MATCH "  fast +Bullet's iterative solve" "  raw +plain Bullet"
+             "  substeps +INT +1 +Substeps per frame" "  split-impulse +on\\|off +on ")
+afb_cli_test(methods_one 0 ARGS methods fast MATCH "  joint-iterations +0 +\\(default: 20\\)" "  substeps +1\n")
+afb_cli_test(methods_json 0 ARGS methods fast --json MATCH "\"name\": \"fast\"" "\"friction-directions\": \"1\"")
+afb_cli_test(methods_misspelt 2 ARGS methods fsat MATCH "unknown method 'fsat'; did you mean 'fast'\\?")
+# The drop table: bodies per instance, a legend, and the method as chart and stress spell it.
+afb_cli_test(drop_table_legend 0 ARGS drop --base . humanoid --count 2 --steps 2 --method fast --iterations 8
+             MATCH "method fast:iterations=8 \\(every knob: --verbose" "\nhumanoid +15 +2 "
+             "bodies: per instance")
+afb_cli_test(drop_verbose 0 ARGS drop --base . chain --steps 2 --verbose
+             MATCH "method default \\(backend rigid, substeps 1, ")
 
 # The bundled content is generated: re-running the generator must reproduce the committed files byte for byte.
 if(TARGET afb_gen_content)
