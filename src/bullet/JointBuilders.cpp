@@ -33,7 +33,6 @@ btTypedConstraint* pyramidLimit(detail::ObjectArena& arena, const FigureConstrai
 JointParts fixedJoint(detail::ObjectArena& arena, const JointSite& s) {
     JointParts out;
     out.main = arena.make<btFixedConstraint>(s.a, s.b, s.frameInA, s.frameInB);
-    out.frictionAxes = s.frameInB.getBasis();
     return out;
 }
 
@@ -122,7 +121,6 @@ JointParts springJoint(detail::ObjectArena& arena, const FigureConstraint& c, co
     out.main = arena.make<SpringConstraint>(s.a, s.b, s.frameInA.getOrigin(), s.frameInB.getOrigin(),
                                             SpringConstraint::Params::of(c.spring));
     out.mainRole = RowRole::Spring;
-    out.frictionAxes = s.frameInB.getBasis();
     return out;
 }
 
@@ -138,7 +136,6 @@ JointParts buildJoint(detail::ObjectArena& arena, const FigureConstraint& c, con
     case JointType::Slider: {
         JointParts out;
         out.main = arena.adopt(makeSlider(site.a, site.b, site.frameInA, site.frameInB));
-        out.frictionAxes = site.frameInB.getBasis();
         return out;
     }
     case JointType::Spring: return springJoint(arena, c, site);

@@ -37,7 +37,7 @@ struct JointParts {
     btTypedConstraint* main = nullptr;
     RowRole mainRole = RowRole::Joint;
     btTypedConstraint* limit = nullptr;
-    btMatrix3x3 frictionAxes;
+    btMatrix3x3 frictionAxes = btMatrix3x3::getIdentity();
     int frictionRows = 0;
 };
 

@@ -176,7 +176,7 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
                 "dashed), front.gp and front.dat (their script and data), summary.md (per figure: every method, the "
                 "Pareto front, the cheapest method within the --max-* bounds).\n"
                 "Methods: a preset or raw (plain Bullet), optionally with knob overrides: NAME[:KNOB=VALUE]..., e.g. "
-                "raw:substeps=4 or default:position-iterations=8 (knobs as in afb drop --help).\n"
+                "raw:substeps=4 or default:position-iterations=8 (afb methods lists the methods and knobs).\n"
                 "Cost: thread CPU time inside the steps per awake body-step (median of the repeats, min-max shown). "
                 "Instruction counts: docs/performance.md.");
     auto opt = std::make_shared<ChartCli>();

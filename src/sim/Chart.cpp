@@ -53,7 +53,7 @@ std::optional<ChartMethod> parseChartMethod(std::string_view spec, std::string& 
         const bullet::MethodKnob* knob = eq == std::string_view::npos ? nullptr : bullet::findKnob(item.substr(0, eq));
         if (!knob) {
             error = "method " + std::string(spec) + ": '" + std::string(item) + "' is not KNOB=VALUE with a knob of " +
-                    "afb drop --help";
+                    "afb methods";
             return std::nullopt;
         }
         if (std::string e = bullet::setKnob(*method, *knob, item.substr(eq + 1)); !e.empty()) {
