@@ -438,16 +438,20 @@ bool Pass::sweep() {
         Side& a = m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body1))];
         Side& b = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body2))] : m_world;
         if ((a.body == nullptr && b.body == nullptr) || &a == &b) continue; // &a == &b: merged, holds exactly
+        // The frames are taken again only after a projection moved the bodies (one that returns false moved
+        // nothing, so the frames it saw still hold).
         const auto& local = m_r.rigidFramesLocal(i);
+        Frames frames = framesOf(a, b, local);
+        const auto moved = [&](bool projected) {
+            if (projected) frames = framesOf(a, b, local);
+            corrected = corrected || projected;
+        };
         if (!std::holds_alternative<std::monostate>(c.limit))
-            corrected = projectLimit(a, b, c, framesOf(a, b, local), a.r * m_r.bodyInRigid(c.body1).getBasis(),
-                                     b.body ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis) ||
-                        corrected;
-        if (freedom.rotation == figure::RotationHold::All)
-            corrected = projectOrientation(a, b, framesOf(a, b, local)) || corrected;
-        else if (freedom.rotation == figure::RotationHold::AllButAxis)
-            corrected = projectHingeAxis(a, b, framesOf(a, b, local)) || corrected;
-        corrected = projectAnchor(a, b, framesOf(a, b, local), freedom.anchor == figure::AnchorHold::Line) || corrected;
+            moved(projectLimit(a, b, c, frames, a.r * m_r.bodyInRigid(c.body1).getBasis(),
+                               b.body ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis));
+        if (freedom.rotation == figure::RotationHold::All) moved(projectOrientation(a, b, frames));
+        else if (freedom.rotation == figure::RotationHold::AllButAxis) moved(projectHingeAxis(a, b, frames));
+        corrected = projectAnchor(a, b, frames, freedom.anchor == figure::AnchorHold::Line) || corrected;
     }
     for (const ContactSides& cs : m_s.contacts) {
         Side& a = cs.a ? *cs.a : m_immovableA;
