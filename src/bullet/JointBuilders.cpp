@@ -87,9 +87,8 @@ JointParts universalJoint(detail::ObjectArena& arena, const FigureConstraint& c,
         out.main = ct;
     }
     // Friction about the frame's Y and Z (the swing axes), fixed in body2.
-    const btMatrix3x3& f = s.frameInB.getBasis();
     out.frictionRows = 2;
-    out.frictionAxes.setValue(f[0][1], f[0][2], 0, f[1][1], f[1][2], 0, f[2][1], f[2][2], 0);
+    out.frictionAxes = swingFrictionAxes(s.frameInB.getBasis());
     if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit))
         out.limit = directionLimit(arena, s, s.body1Rotation * toBt(cone->shaftInBody1),
                                    basisWithX(s.body2Rotation * toBt(cone->axisInBody2)), LimitShape::Cone,
@@ -110,9 +109,8 @@ JointParts hingeJoint(detail::ObjectArena& arena, const FigureConstraint& c, con
     }
     out.main = h;
     // Friction about the hinge axis (the frame's Z), fixed in body2.
-    const btMatrix3x3& f = s.frameInB.getBasis();
     out.frictionRows = 1;
-    out.frictionAxes.setValue(f[0][2], 0, 0, f[1][2], 0, 0, f[2][2], 0, 0);
+    out.frictionAxes = hingeFrictionAxes(s.frameInB.getBasis());
     return out;
 }
 
@@ -125,6 +123,12 @@ JointParts springJoint(detail::ObjectArena& arena, const FigureConstraint& c, co
 }
 
 } // namespace
+
+btMatrix3x3 swingFrictionAxes(const btMatrix3x3& f) {
+    return btMatrix3x3(f[0][1], f[0][2], 0, f[1][1], f[1][2], 0, f[2][1], f[2][2], 0);
+}
+
+btMatrix3x3 hingeFrictionAxes(const btMatrix3x3& f) { return btMatrix3x3(f[0][2], 0, 0, f[1][2], 0, 0, f[2][2], 0, 0); }
 
 JointParts buildJoint(detail::ObjectArena& arena, const FigureConstraint& c, const JointSite& site,
                       const JointPolicy& policy) {

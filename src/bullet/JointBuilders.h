@@ -45,4 +45,13 @@ struct JointParts {
 JointParts buildJoint(detail::ObjectArena& arena, const figure::FigureConstraint& c, const JointSite& site,
                       const JointPolicy& policy);
 
+/// The axes of a universal joint's two friction rows (docs/format.md §4.8): the Y and Z columns of `frameB` (the
+/// swing axes, perpendicular to shaft 1), as the first two columns; `frameB` is frame B's rotation in the body that
+/// fixes the rows. Both backends' universal builders use it.
+btMatrix3x3 swingFrictionAxes(const btMatrix3x3& frameB);
+
+/// The axis of a hinge's friction row (docs/format.md §4.8): the Z column of `frameB` (the hinge axis), as the first
+/// column. Both backends' hinge builders use it.
+btMatrix3x3 hingeFrictionAxes(const btMatrix3x3& frameB);
+
 } // namespace afb::bullet

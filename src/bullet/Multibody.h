@@ -3,18 +3,18 @@
 // btMultiBody trees in a btMultiBodyDynamicsWorld. Internal: bullet::Ragdoll owns one and forwards its
 // interface to it, so nothing above the bullet layer sees which backend runs.
 #include <memory>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
 
+#include "MultibodyJoints.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/detail/Probes.h"
 
-class btMultiBody;
-class btMultiBodyConstraint;
 class btMultiBodyDynamicsWorld;
 class btMultiBodyLinkCollider;
 
@@ -32,7 +32,11 @@ inline constexpr const char* kNeedsMultiBodyWorld =
 
 /// A figure as btMultiBody trees: one per connected part of its constraint graph, a body fixed to the world as a
 /// fixed base, else the part's first body as the floating base and one link per tree edge (a universal joint: a
-/// spherical link whose twist a row holds). Loops, world attachments and springs are btMultiBodyConstraints.
+/// spherical link whose twist a row holds). Loops, world attachments and springs are btMultiBodyConstraints. What
+/// each joint type becomes is MultibodyJoints.h's; which joints are edges, bases and loops is figure::freedomOf's.
+/// Files: Multibody.cpp (the instance, its per-substep action and its state), MultibodyTree.cpp (trees, links,
+/// colliders, joint coordinates), MultibodyConstraints.cpp (loops, limits, friction, springs, guards),
+/// MultibodySweeps.cpp (position sweeps), MultibodyRows.h (the rows themselves).
 class MultibodyRagdoll {
   public:
     /// Throws std::invalid_argument (kNeedsMultiBodyWorld) unless `world` is a btMultiBodyDynamicsWorld.
@@ -51,6 +55,10 @@ class MultibodyRagdoll {
     /// Links of figure body `i`'s tree (−1: the base) and its part.
     int linkOf(int i) const { return m_bodies[static_cast<std::size_t>(i)].link; }
     int partOf(int i) const { return m_bodies[static_cast<std::size_t>(i)].part; }
+    /// The role of each of the ragdoll's btMultiBodyConstraints that adds rows, in the order the ragdoll holds them:
+    /// per figure constraint its friction rows, a loop's own constraint, its limit; then every twist row (the energy
+    /// guards, which add no rows, left out).
+    std::vector<RowRole> rowRoles() const;
 
     /// Body frames (centre of mass, principal axes) and velocities now, in figure body order.
     std::vector<BodySample> samples() const;
@@ -81,9 +89,11 @@ class MultibodyRagdoll {
         int part = 0;
         int link = -1; ///< −1: the part's base
     };
-    /// How a link's joint coordinates follow from its two bodies' poses (setBodyStates).
+    /// A tree edge: the link that carries the child, and how its coordinates follow from its two bodies' poses
+    /// (setBodyStates).
     struct Joint {
-        enum class Kind { Fixed, Revolute, Prismatic, Spherical, Universal } kind = Kind::Fixed;
+        LinkKind kind{};
+        bool twistRow = false;         ///< a spherical link whose twist a row holds (a universal joint)
         int child = -1, parent = -1;   ///< figure bodies
         int link = -1;                 ///< the child's link
         btMatrix3x3 zeroParentToChild; ///< rotation parent frame → child frame at zero coordinates
@@ -99,19 +109,52 @@ class MultibodyRagdoll {
         bool fixedBase = false;    ///< fixed to the world (the figure fixes that body there)
         std::vector<Joint> joints; ///< in link order (parents first)
     };
+    /// A btMultiBodyConstraint of the ragdoll's, and the role of its rows (none: an energy guard, which adds none).
+    struct Owned {
+        std::unique_ptr<btMultiBodyConstraint> constraint;
+        std::optional<RowRole> role;
+    };
 
-    void build(const SpawnOptions& options);
+    // MultibodyTree.cpp
+    /// The multibody parts of every figure constraint (MultibodyJoints.h), at the frames m_frames holds.
+    std::vector<MultibodyJointParts> jointParts() const;
+    /// The parts (trees) and where each body sits in them, tree edges breadth first from each part's base.
+    void layoutTrees(std::span<const MultibodyJointParts> joints);
+    /// Tree edge `ci` from body `parent` to body `child`.
+    Joint treeJoint(int ci, int parent, int child, const MultibodyJointParts& parts) const;
+    /// The part's btMultiBody, its links set up, into the world.
+    void buildTree(Part& part, const SpawnOptions& options);
     void addColliders(const SpawnOptions& options);
-    void addConstraints(const Method& method);
+    /// The figure body of collision object `o` if it is one of this ragdoll's, else −1.
+    int bodyOfCollider(const btCollisionObject* o) const;
+    /// Joint `j`'s coordinates and their rates from its two bodies' states.
+    static void setJointCoordinates(btMultiBody& mb, const Joint& j, const figure::BodyState& parent,
+                                    const figure::BodyState& child);
+
+    // MultibodyConstraints.cpp
+    btMultiBodyConstraint* add(std::unique_ptr<btMultiBodyConstraint> constraint, std::optional<RowRole> role);
+    void addConstraints(const Method& method, std::span<const MultibodyJointParts> joints);
+    /// A loop or a world attachment `c` with its frames: a constraint on the anchors (and on the frames when the
+    /// joint holds every rotation), solved like a rigid body's joint, so it can separate again; not in the world yet.
+    std::unique_ptr<btMultiBodyConstraint> makeLoop(const figure::FigureConstraint& c,
+                                                    const std::pair<btTransform, btTransform>& frames);
+    /// Figure constraint `c`'s limit on the links of its tree.
+    void addLimit(const figure::FigureConstraint& c, const MultibodyLimit::Kind& limit, const LimitRowPolicy& policy);
+    /// The twist rows of the tree edges whose link leaves the twist free (universal joints, §4.4), parent side first.
+    void addTwistRows(const LimitRowPolicy& policy);
     /// docs/format.md §4.8 joint friction rows on figure constraint `ci` if it has friction (`loop`: its constraint
     /// when it is not a tree edge, whose applied impulses are the reaction; else the reaction of the child's subtree).
-    void addFriction(int ci, btMultiBodyConstraint* loop);
+    void addFriction(int ci, const MultibodyJointParts& parts, btMultiBodyConstraint* loop);
+    /// The figure bodies of the subtree that tree edge `c` carries (its child's and below), or none if `c` is not one.
+    std::optional<std::vector<int>> subtreeOf(const figure::FigureConstraint& c) const;
     /// §4.7: the spring between the two bodies' anchors (frames' origins, body frames; world for the world).
     void addSpring(const figure::FigureConstraint& c, const btTransform& fa, const btTransform& fb);
     /// Each friction row's bound for the coming step from its joint's reaction in the step just solved.
     void updateFrictionBounds(btScalar dt);
-    void refreshTransforms(btMultiBody& body);
-    void dampVelocities(btScalar dt);
+    /// This substep's contact impulse on each body (m_contactImpulse).
+    void gatherContactImpulses();
+
+    // MultibodySweeps.cpp
     /// A contact of the ragdoll's bodies for the position sweeps: the figure bodies on each side (−1: not ours).
     struct SweepContact {
         btPersistentManifold* manifold;
@@ -125,6 +168,10 @@ class MultibodyRagdoll {
     bool correctContact(const SweepContact& c, const btManifoldPoint& cp, btAlignedObjectArray<btScalar>& r,
                         btAlignedObjectArray<btVector3>& v, btAlignedObjectArray<btMatrix3x3>& m,
                         btAlignedObjectArray<btQuaternion>& q, btAlignedObjectArray<btVector3>& o);
+
+    // Multibody.cpp
+    void refreshTransforms(btMultiBody& body);
+    void dampVelocities(btScalar dt);
     /// Every body's velocity on its collider (btCollisionObject's interpolation velocities, which Bullet leaves
     /// unused for a link collider), where the collision algorithms and the speculative reach read a body's motion
     /// (as a btRigidBody's velocity for the rigid backend).
@@ -138,21 +185,21 @@ class MultibodyRagdoll {
     std::vector<Part> m_parts;
     std::vector<BodyRef> m_bodies;
     std::vector<std::unique_ptr<btMultiBodyLinkCollider>> m_colliders; ///< per figure body
-    std::vector<std::unique_ptr<btMultiBodyConstraint>> m_constraints; ///< limits, loops, world joints, springs
-    std::vector<std::pair<btTransform, btTransform>> m_frames;         ///< per figure constraint (Ragdoll's meaning)
+    std::vector<Owned> m_constraints; ///< limits, twists, loops, world joints, friction, springs, guards
+    std::vector<std::pair<btTransform, btTransform>> m_frames; ///< per figure constraint (Ragdoll's meaning)
     std::vector<std::pair<int, int>>
         m_colliding; ///< figure::selfCollisionPairs (Method::exemptOverlapping: less the overlapping)
     std::vector<btVector3> m_angularVelocity; ///< per figure body, at the end of the last substep (limit margins)
     btScalar m_linearDamping = 0, m_angularDamping = 0;
-    std::vector<bool> m_treeEdge;                 ///< per figure constraint: a tree joint (a link), not a loop
-    std::vector<btMultiBodyConstraint*> m_guards; ///< per part, its energy guard (owned by m_constraints)
-    std::vector<btMultiBodyConstraint*> m_limits; ///< limit and twist rows (owned by m_constraints)
-    int m_positionIterations = 0;                 ///< sweeps of correctPositions
-    std::vector<SweepContact> m_sweepContacts;    ///< this substep's, for correctPositions
+    std::vector<bool> m_treeEdge;              ///< per figure constraint: a tree joint (a link), not a loop
+    std::vector<EnergyGuard*> m_guards;        ///< per part, its energy guard (owned by m_constraints)
+    std::vector<MultibodyLimit*> m_swept;      ///< limit and twist rows, for the sweeps (owned by m_constraints)
+    int m_positionIterations = 0;              ///< sweeps of correctPositions
+    std::vector<SweepContact> m_sweepContacts; ///< this substep's, for correctPositions
     std::vector<btScalar> m_sweepJac, m_sweepJacB, m_sweepMove;
     /// A joint's friction rows and where its reaction force is read.
     struct Friction {
-        btMultiBodyConstraint* rows = nullptr; ///< a JointFriction (owned by m_constraints)
+        MultibodyFriction* rows = nullptr;     ///< owned by m_constraints
         std::vector<int> subtree;              ///< a tree joint: the figure bodies its child carries
         btMultiBodyConstraint* loop = nullptr; ///< a loop or world joint's constraint
         btScalar coefficientTimesLever = 0;    ///< friction × metres per unit (§4.8 in SI)
