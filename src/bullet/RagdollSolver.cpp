@@ -237,16 +237,18 @@ btScalar RagdollSolver::solveSingleIteration(int iteration, btCollisionObject** 
     return residual;
 }
 
-void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct) {
+void RagdollSolver::track(const btTypedConstraint& constraint, bool warmStart, bool direct, bool soft) {
     const btHashPtr key(&constraint);
     if (Tracked* t = m_rows.find(key)) {
         t->warmStart = warmStart;
         t->direct = direct;
+        t->soft = soft;
         return;
     }
     Tracked t;
     t.warmStart = warmStart;
     t.direct = direct;
+    t.soft = soft;
     m_rows.insert(key, t);
 }
 
@@ -270,18 +272,33 @@ void RagdollSolver::convertContacts(btPersistentManifold** manifoldPtr, int numM
     btSequentialImpulseConstraintSolver::convertContacts(manifoldPtr, numManifolds, infoGlobal);
 }
 
+// A soft row's update with its cfm in the effective mass (track): Δλ = (rhs − J·v − c·λ/m) · m/(1 + c). Bullet
+// set m_jacDiagABInv = m, m_rhs = m·(rhs − J·v₀) and m_cfm = c; scaling all three by 1/(1 + c) gives that update
+// in Bullet's own row functions, and keeps m_cfm/m_jacDiagABInv and m_rhs/m_jacDiagABInv (what the direct
+// solve reads) as they were.
+void RagdollSolver::softenRow(btSolverConstraint& c) {
+    if (!(c.m_cfm > 0)) return;
+    const btScalar scale = 1 / (1 + c.m_cfm);
+    c.m_jacDiagABInv *= scale;
+    c.m_rhs *= scale;
+    c.m_cfm *= scale;
+}
+
 void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.remove(btHashPtr(&constraint)); }
 
 void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstraints,
                                   const btContactSolverInfo& infoGlobal) {
     btSequentialImpulseConstraintSolver::convertJoints(constraints, numConstraints, infoGlobal);
-    if (m_rows.size() == 0 || (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) == 0) return;
+    if (m_rows.size() == 0) return;
+    const bool warmStarting = (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) != 0;
     // The base class lays the rows out constraint by constraint, in the order given, m_numConstraintRows each.
     int row = 0;
     for (int i = 0; i < numConstraints; ++i) {
         const int rows = m_tmpConstraintSizesPool[i].m_numConstraintRows;
         const Tracked* t = m_rows.find(btHashPtr(constraints[i]));
-        if (t != nullptr && t->warmStart && t->rows == rows) {
+        if (t != nullptr && t->soft)
+            for (int k = 0; k < rows; ++k) softenRow(m_tmpSolverNonContactConstraintPool[row + k]);
+        if (t != nullptr && warmStarting && t->warmStart && t->rows == rows) {
             for (int k = 0; k < rows; ++k) {
                 btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[row + k];
                 const btScalar start = t->impulses[k] * infoGlobal.m_warmstartingFactor;

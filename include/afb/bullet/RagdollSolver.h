@@ -31,9 +31,12 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     RagdollSolver(const RagdollSolver&) = delete;
     RagdollSolver& operator=(const RagdollSolver&) = delete;
 
-    /// Track `constraint` from now on (until untrack): warm-start its rows (`warmStart`), and let the direct joint
-    /// solve take its unbounded rows (`direct`, see setDirectJoints).
-    void track(const btTypedConstraint& constraint, bool warmStart = true, bool direct = false);
+    /// Track `constraint` from now on (until untrack): warm-start its rows (`warmStart`), let the direct joint
+    /// solve take its unbounded rows (`direct`, see setDirectJoints), and solve its rows as soft constraints
+    /// (`soft`): a row whose cfm is c (Bullet's convention: J·v + c·λ/m = rhs, m the row's effective mass) is
+    /// updated with the effective mass m/(1 + c), which Bullet's update leaves out. That update converges for any
+    /// c, where Bullet's oscillates and grows once c exceeds 1 (JointMotorConstraint's rows at a fast step).
+    void track(const btTypedConstraint& constraint, bool warmStart = true, bool direct = false, bool soft = false);
     /// Forget `constraint` (call before it is destroyed).
     void untrack(const btTypedConstraint& constraint);
     /// How many constraints are tracked.
@@ -119,6 +122,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
         int rows = -1; ///< how many impulses were kept on the last step (−1: none, or more than kMaxRows)
         bool warmStart = true;
         bool direct = false;
+        bool soft = false;
     };
     /// The iterations' row order over the islands Bullet solves together (it batches small islands into one solve):
     /// each island's rows in Bullet's order, the islands taken in turn, a row of each, so that the next row rarely
@@ -140,6 +144,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
         }
     };
     IslandOrder m_islandOrder;
+    static void softenRow(btSolverConstraint& c);
     int m_mostIslandsInTurn = 0;
     struct Direct;
     bool buildDirect();

@@ -1,0 +1,20 @@
+#pragma once
+// Joint motors: a drive that pulls a joint toward a target relative pose and velocity as an implicit
+// (stable) spring and damper, solved with the joint's other rows.
+#include <limits>
+
+namespace afb::bullet {
+
+/// How hard a joint motor drives toward its target. The spring and the damper are given as the natural frequency and
+/// damping ratio of the oscillator the motor makes of the joint's two bodies (their effective inertia about the
+/// driven axis), so one setting means the same on a hand and on a chest. The drive is implicit: its stiffness and
+/// damping enter the solve of the step (stable proportional-derivative control), so any frequency is stable at any
+/// step, and a frequency far above the step rate turns the motor into a hard constraint to the target.
+struct MotorGains {
+    double frequencyHz = 0;  ///< natural frequency, Hz; 0 or less: the motor is off
+    double dampingRatio = 1; ///< 1: critically damped; below 1 it overshoots, above it creeps; ≥ 0
+    double maxTorqueNm = std::numeric_limits<double>::infinity(); ///< bound of each angular row, N·m
+    double maxForceN = std::numeric_limits<double>::infinity();   ///< bound of a linear row (sliders), N
+};
+
+} // namespace afb::bullet
