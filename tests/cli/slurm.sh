@@ -29,11 +29,11 @@ trap stop EXIT
 # munge: a key of its own and a socket in the scratch folder, run as the munge user.
 mungekey -c -k "$scratch/munge/munge.key" > /dev/null 2>&1 || mungekey -c -f -k "$scratch/munge/munge.key"
 chown -R munge: "$scratch/munge"
-chmod 700 "$scratch/munge"
+chmod 755 "$scratch/munge"
 chmod 400 "$scratch/munge/munge.key"
 runuser -u munge -- munged --foreground --force --key-file="$scratch/munge/munge.key" --socket="$scratch/munge/socket" \
   --pid-file="$scratch/munge/munged.pid" --log-file="$scratch/munge/munged.log" \
-  --seed-file="$scratch/munge/seed" &
+  --seed-file="$scratch/munge/seed" > "$scratch/log/munged.out" 2>&1 &
 pids+=($!)
 
 # Ports of their own, so that another Slurm on the machine is left alone.
