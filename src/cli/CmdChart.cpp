@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include "ChartCli.h"
 #include "ChartPlot.h"
 #include "Commands.h"
 #include "MethodOptions.h"
@@ -38,17 +39,7 @@ void drawProgress(int done, int total, double elapsedSeconds) {
     std::fflush(stderr);
 }
 
-struct ChartCli {
-    std::filesystem::path base = ".";
-    std::vector<std::string> entities;
-    // exact is the default; the iterative default it replaced stays on the front.
-    std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
-    sim::ChartOptions chart;
-    std::filesystem::path out = "chart";
-    std::string precision;
-    bool noSleep = false;
-    std::optional<double> maxAnchor, maxLimit, maxPenetration, maxSettle;
-};
+} // namespace
 
 void addChartOptions(CLI::App* cmd, ChartCli& opt) {
     cmd->add_option("entities", opt.entities, "entityDefs to chart")->required();
@@ -87,6 +78,8 @@ void addChartOptions(CLI::App* cmd, ChartCli& opt) {
     cmd->add_option("--max-settle-time", opt.maxSettle, "Bound on the settle time, s")->check(nonNegative());
 }
 
+namespace {
+
 // The methods of --methods, each once; a spec that does not parse is a usage error.
 std::vector<sim::ChartMethod> parseMethods(const std::vector<std::string>& specs) {
     std::vector<sim::ChartMethod> methods;
@@ -116,47 +109,14 @@ void runChartInto(const ChartCli& opt, const std::vector<figure::Figure>& figure
         if (tty)
             drawProgress(done, all, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     });
-    const std::vector<sim::ChartPoint> points = sim::chartPoints(runs, names, chart.methods);
-    const sim::ChartBounds bounds{opt.maxAnchor, opt.maxLimit, opt.maxPenetration, opt.maxSettle};
-
-    std::ofstream(opt.out / "runs.csv") << sim::chartRunsCsv(runs);
-    const std::string summary = sim::chartSummaryMarkdown(points, chart, bounds, runs.size());
-    std::ofstream(opt.out / "summary.md") << summary;
-    std::string heights, rates;
-    for (double h : chart.heightsM) heights += (heights.empty() ? "" : ", ") + CLI::detail::to_string(h);
-    for (double hz : chart.hz) rates += (rates.empty() ? "" : ", ") + CLI::detail::to_string(hz);
-    const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", drops from " +
-                                 heights + " m at " + rates + " Hz, " + CLI::detail::to_string(chart.seconds) +
-                                 " s; errors: worst over the drops";
-    std::string plotError = writeChartPlot(opt.out, points, chart, subtitle);
-    if (plotError.empty()) plotError = runGnuplot(opt.out);
-    std::printf("\n%s", summary.c_str());
-    for (const sim::ChartPoint& p : points)
-        if (p.exploded) std::printf("note: %s exploded on %s\n", p.label.c_str(), p.figure.c_str());
-    if (!plotError.empty()) std::cerr << "afb chart: warning: no front.png/front.svg: " << plotError << "\n";
-    std::printf("\nwrote %s/{runs.csv,summary.md,front.gp,front.dat%s}\n", opt.out.string().c_str(),
-                plotError.empty() ? ",front.png,front.svg" : "");
+    writeChartOutputs(opt, runs, names);
 }
 
 int chartCommand(ChartCli& opt) {
-    sim::ChartOptions& chart = opt.chart;
-    chart.sleeping = !opt.noSleep;
-    chart.methods = parseMethods(opt.methods);
-    if (chart.heightsM.empty() || chart.hz.empty() || chart.methods.empty())
-        usageError("--heights, --hz and --methods need at least one value each");
-    text::Diagnostics diags;
-    auto lib = decl::Library::open(opt.base, diags);
+    resolveChartOptions(opt);
     std::vector<figure::Figure> figures;
     std::vector<std::string> names;
-    if (lib && findEntities(*lib, opt.entities, diags))
-        for (const std::string& e : opt.entities) {
-            std::optional<figure::LoadedFigure> loaded = figure::loadEntityFigure(*lib, e, {}, diags);
-            if (!loaded) continue;
-            names.push_back(loaded->figure.name);
-            figures.push_back(std::move(loaded->figure));
-        }
-    printDiagnostics(diags);
-    if (diags.hasErrors() || figures.empty()) return kExitFailure;
+    if (!loadChartFigures(opt, figures, names)) return kExitFailure;
     std::error_code ec;
     std::filesystem::create_directories(opt.out, ec);
     if (ec) {
@@ -189,6 +149,52 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
         }
         exitCode = chartCommand(*opt);
     });
+}
+
+void resolveChartOptions(ChartCli& opt) {
+    sim::ChartOptions& chart = opt.chart;
+    chart.sleeping = !opt.noSleep;
+    chart.methods = parseMethods(opt.methods);
+    if (chart.heightsM.empty() || chart.hz.empty() || chart.methods.empty())
+        usageError("--heights, --hz and --methods need at least one value each");
+}
+
+bool loadChartFigures(const ChartCli& opt, std::vector<figure::Figure>& figures, std::vector<std::string>& names) {
+    text::Diagnostics diags;
+    auto lib = decl::Library::open(opt.base, diags);
+    if (lib && findEntities(*lib, opt.entities, diags))
+        for (const std::string& e : opt.entities) {
+            std::optional<figure::LoadedFigure> loaded = figure::loadEntityFigure(*lib, e, {}, diags);
+            if (!loaded) continue;
+            names.push_back(loaded->figure.name);
+            figures.push_back(std::move(loaded->figure));
+        }
+    printDiagnostics(diags);
+    return !diags.hasErrors() && figures.size() == opt.entities.size();
+}
+
+void writeChartOutputs(const ChartCli& opt, const std::vector<sim::ChartRun>& runs,
+                       const std::vector<std::string>& names) {
+    const sim::ChartOptions& chart = opt.chart;
+    const std::vector<sim::ChartPoint> points = sim::chartPoints(runs, names, chart.methods);
+    const sim::ChartBounds bounds{opt.maxAnchor, opt.maxLimit, opt.maxPenetration, opt.maxSettle};
+    std::ofstream(opt.out / "runs.csv") << sim::chartRunsCsv(runs);
+    const std::string summary = sim::chartSummaryMarkdown(points, chart, bounds, runs.size());
+    std::ofstream(opt.out / "summary.md") << summary;
+    std::string heights, rates;
+    for (double h : chart.heightsM) heights += (heights.empty() ? "" : ", ") + CLI::detail::to_string(h);
+    for (double hz : chart.hz) rates += (rates.empty() ? "" : ", ") + CLI::detail::to_string(hz);
+    const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", drops from " +
+                                 heights + " m at " + rates + " Hz, " + CLI::detail::to_string(chart.seconds) +
+                                 " s; errors: worst over the drops";
+    std::string plotError = writeChartPlot(opt.out, points, chart, subtitle);
+    if (plotError.empty()) plotError = runGnuplot(opt.out);
+    std::printf("\n%s", summary.c_str());
+    for (const sim::ChartPoint& p : points)
+        if (p.exploded) std::printf("note: %s exploded on %s\n", p.label.c_str(), p.figure.c_str());
+    if (!plotError.empty()) std::cerr << "afb chart: warning: no front.png/front.svg: " << plotError << "\n";
+    std::printf("\nwrote %s/{runs.csv,summary.md,front.gp,front.dat%s}\n", opt.out.string().c_str(),
+                plotError.empty() ? ",front.png,front.svg" : "");
 }
 
 } // namespace afb::cli

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "Commands.h"
+#include "DropCli.h"
 #include "MethodOptions.h"
 #include "Usage.h"
 #include "afb/figure/Load.h"
@@ -17,22 +18,6 @@
 #include "afb/sim/Report.h"
 
 namespace afb::cli {
-namespace {
-
-struct DropCli {
-    std::filesystem::path base = ".";
-    std::vector<std::string> entities;
-    sim::DropOptions drop;
-    std::optional<std::uint32_t> seed;
-    std::shared_ptr<MethodOptions> method = std::make_shared<MethodOptions>();
-    std::optional<int> steps;
-    std::string precision;
-    std::string json, csv;
-    std::filesystem::path gltf;
-    double gravity = 9.81;
-    bool doomGravity = false, noSleep = false, strict = false, verbose = false;
-    std::optional<int> worlds;
-};
 
 void addDropOptions(CLI::App* cmd, DropCli& opt) {
     cmd->add_option("entities", opt.entities, "entityDefs to drop")->required();
@@ -80,7 +65,6 @@ void addDropOptions(CLI::App* cmd, DropCli& opt) {
                     "its skeleton, the body hulls, the ground and one animation at the step rate; metres, Y up");
 }
 
-// Options that do not go together, refused before anything runs.
 void checkDropOptions(const DropCli& opt, const bullet::Method& method) {
     if (!opt.steps) checkStepCount("--seconds", opt.drop.seconds, opt.drop.hz);
     if (opt.json == "-" && opt.csv == "-") usageError("--json - and --csv - both ask for stdout; give one a file");
@@ -93,9 +77,8 @@ void checkDropOptions(const DropCli& opt, const bullet::Method& method) {
     if (opt.entities.size() != 1) usageError("--gltf records one entity: give exactly one");
 }
 
-// Every entity's figure, or nullopt when one cannot be loaded (the diagnostics say why).
-std::optional<std::vector<figure::LoadedFigure>> loadFigures(const DropCli& opt, const figure::UnitSystem& units,
-                                                             text::Diagnostics& diags) {
+std::optional<std::vector<figure::LoadedFigure>> loadDropFigures(const DropCli& opt, const figure::UnitSystem& units,
+                                                                 text::Diagnostics& diags) {
     auto lib = decl::Library::open(opt.base, diags);
     if (!lib || !findEntities(*lib, opt.entities, diags)) return std::nullopt;
     std::vector<figure::LoadedFigure> figures;
@@ -108,6 +91,8 @@ std::optional<std::vector<figure::LoadedFigure>> loadFigures(const DropCli& opt,
     if (!all) return std::nullopt;
     return figures;
 }
+
+namespace {
 
 void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, const std::vector<std::string>& labels,
                 int count) {
@@ -178,59 +163,29 @@ std::optional<std::vector<std::string>> writeReplay(const DropCli& opt, const st
 }
 
 int runDrops(DropCli& opt, const bullet::Method& method) {
-    opt.drop.method = method;
-    opt.drop.seed = opt.seed;
-    opt.drop.steps = opt.steps;
-    opt.drop.sleeping = !opt.noSleep;
-    opt.drop.worlds = opt.worlds.value_or(std::max(1, opt.drop.threads)); // --threads N alone: N worlds
-    figure::UnitSystem units;
-    units.gravityMps2 = opt.doomGravity ? units.doomGravityMps2() : opt.gravity;
+    const figure::UnitSystem units = resolveDropOptions(opt, method);
     text::Diagnostics diags;
-    auto figures = loadFigures(opt, units, diags);
+    auto figures = loadDropFigures(opt, units, diags);
     printDiagnostics(diags);
     if (!figures) return kExitFailure;
-    // With a report on stdout, stdout holds only that report.
-    std::FILE* text = opt.json == "-" || opt.csv == "-" ? stderr : stdout;
-    // The method as chart and stress spell it (the preset and the knobs set on it); every knob with --verbose.
-    const std::string methodLine =
-        opt.verbose
-            ? bullet::describe(opt.drop.method)
-            : methodSpec(opt.drop.method) + " (every knob: --verbose, or afb methods " + opt.drop.method.name + ")";
-    std::fprintf(text, "afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
-                 sim::bulletVersion().c_str(), sim::bulletPrecision(), opt.drop.hz, opt.drop.sleeping ? "on" : "off",
-                 units.gravityMps2, methodLine.c_str());
-    if (opt.drop.lod)
-        std::fprintf(text, "  level of detail: --lod %d (automatic merge; each figure's rigid bodies below)\n",
-                     *opt.drop.lod);
-    std::fflush(text);
+    printDropHeader(opt, units);
     int exitCode = 0;
     std::vector<sim::DropResult> results;
-    // The table names each row by its entity, and by the figure too where they differ: entities that share a
-    // figure (humanoid, humanoid_prop, humanoid_sleeping) would otherwise print alike.
-    std::vector<std::string> labels;
     std::vector<std::string> replays; // what --gltf wrote, printed after the table
     for (std::size_t i = 0; i < figures->size(); ++i) {
         const std::string& e = opt.entities[i];
         const figure::LoadedFigure& loaded = (*figures)[i];
         if (::isatty(STDERR_FILENO)) std::fprintf(stderr, "  dropping %s x %d ...\r", e.c_str(), opt.drop.count);
-        sim::DropOptions drop = opt.drop;
-        drop.startAtRest = loaded.startAtRest; // "nodrop"/"sleep" entities hang until touched
         sim::DropRecording recording;
         sim::DropObserver observer;
-        if (!opt.gltf.empty()) observer = sim::recordInto(recording, drop.hz);
-        results.push_back(sim::runDrop(loaded.figure, drop, observer));
-        labels.push_back(results.back().figure == e ? e : e + " (" + results.back().figure + ")");
-        if (results.back().exploded) exitCode = kExitFailure;
+        if (!opt.gltf.empty()) observer = sim::recordInto(recording, opt.drop.hz);
+        results.push_back(dropOne(opt, loaded, observer));
         if (opt.gltf.empty()) continue;
-        if (auto lines = writeReplay(opt, e, loaded, recording, drop.hz))
+        if (auto lines = writeReplay(opt, e, loaded, recording, opt.drop.hz))
             replays.insert(replays.end(), lines->begin(), lines->end());
         else exitCode = kExitFailure;
     }
-    printTable(text, results, labels, opt.drop.count);
-    for (const std::string& line : replays) std::fprintf(text, "%s\n", line.c_str());
-    std::fflush(text);
-    writeReports(opt, results, units.gravityMps2);
-    return exitCode;
+    return std::max(exitCode, reportDrops(opt, results, replays, units.gravityMps2));
 }
 
 } // namespace
@@ -260,6 +215,63 @@ void execOtherPrecision(const std::string& precision, char** argv, const char* c
     const std::filesystem::path other = self.parent_path() / (precision == "double" ? "afb-double" : "afb");
     ::execv(other.c_str(), argv);
     std::cerr << command << ": cannot run " << other.string() << " for --precision " << precision << "\n";
+}
+
+figure::UnitSystem resolveDropOptions(DropCli& opt, const bullet::Method& method) {
+    opt.drop.method = method;
+    opt.drop.seed = opt.seed;
+    opt.drop.steps = opt.steps;
+    opt.drop.sleeping = !opt.noSleep;
+    opt.drop.worlds = opt.worlds.value_or(std::max(1, opt.drop.threads)); // --threads N alone: N worlds
+    figure::UnitSystem units;
+    units.gravityMps2 = opt.doomGravity ? units.doomGravityMps2() : opt.gravity;
+    return units;
+}
+
+std::FILE* dropTextStream(const DropCli& opt) {
+    // With a report on stdout, stdout holds only that report.
+    return opt.json == "-" || opt.csv == "-" ? stderr : stdout;
+}
+
+void printDropHeader(const DropCli& opt, const figure::UnitSystem& units) {
+    std::FILE* text = dropTextStream(opt);
+    // The method as chart and stress spell it (the preset and the knobs set on it); every knob with --verbose.
+    const std::string methodLine =
+        opt.verbose
+            ? bullet::describe(opt.drop.method)
+            : methodSpec(opt.drop.method) + " (every knob: --verbose, or afb methods " + opt.drop.method.name + ")";
+    std::fprintf(text, "afb drop: Bullet %s (%s), %g Hz, sleeping %s, gravity %.3f m/s²\n  method %s\n",
+                 sim::bulletVersion().c_str(), sim::bulletPrecision(), opt.drop.hz, opt.drop.sleeping ? "on" : "off",
+                 units.gravityMps2, methodLine.c_str());
+    if (opt.drop.lod)
+        std::fprintf(text, "  level of detail: --lod %d (automatic merge; each figure's rigid bodies below)\n",
+                     *opt.drop.lod);
+    std::fflush(text);
+}
+
+sim::DropResult dropOne(const DropCli& opt, const figure::LoadedFigure& loaded, const sim::DropObserver& observer) {
+    sim::DropOptions drop = opt.drop;
+    drop.startAtRest = loaded.startAtRest; // "nodrop"/"sleep" entities hang until touched
+    return sim::runDrop(loaded.figure, drop, observer);
+}
+
+int reportDrops(const DropCli& opt, const std::vector<sim::DropResult>& results, const std::vector<std::string>& notes,
+                double gravityMps2) {
+    // The table names each row by its entity, and by the figure too where they differ: entities that share a
+    // figure (humanoid, humanoid_prop, humanoid_sleeping) would otherwise print alike.
+    std::vector<std::string> labels;
+    int exitCode = 0;
+    for (std::size_t i = 0; i < results.size(); ++i) {
+        const std::string& e = opt.entities[i];
+        labels.push_back(results[i].figure == e ? e : e + " (" + results[i].figure + ")");
+        if (results[i].exploded) exitCode = kExitFailure;
+    }
+    std::FILE* text = dropTextStream(opt);
+    printTable(text, results, labels, opt.drop.count);
+    for (const std::string& line : notes) std::fprintf(text, "%s\n", line.c_str());
+    std::fflush(text);
+    writeReports(opt, results, gravityMps2);
+    return exitCode;
 }
 
 } // namespace afb::cli

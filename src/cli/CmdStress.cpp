@@ -11,6 +11,7 @@
 #include "ChartPlot.h"
 #include "Commands.h"
 #include "MethodOptions.h"
+#include "StressCli.h"
 #include "Suggest.h"
 #include "Usage.h"
 #include "afb/figure/Load.h"
@@ -83,20 +84,7 @@ std::string fixedYaw(double deg) {
     return buf;
 }
 
-struct StressCli {
-    std::filesystem::path base = ".";
-    // Every preset, the multibody backend included. Every method is judged on its physics alone; default+rest is
-    // the default as the library spawns a ragdoll (SpawnOptions::comeToRest, the engine's rest rules), the verdict
-    // a game sees.
-    std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "iterative",
-                                        "default", "default+rest", "accurate", "multibody"};
-    std::vector<std::string> scenarios;
-    std::filesystem::path out = "stress";
-    int threads = 2;
-    int yaws = 1;
-    std::string precision;
-    bool list = false, ci = false;
-};
+} // namespace
 
 void addStressOptions(CLI::App* cmd, StressCli& opt) {
     cmd->add_option("--base", opt.base, "Content folder with the humanoid (af/, def/, models/)")->capture_default_str();
@@ -122,8 +110,7 @@ void addStressOptions(CLI::App* cmd, StressCli& opt) {
         ->check(CLI::IsMember({"float", "double"}));
 }
 
-// The methods of --methods, each once; a spec that does not parse is a usage error.
-std::vector<sim::StressMethod> parseMethods(const std::vector<std::string>& specs) {
+std::vector<sim::StressMethod> parseStressMethods(const std::vector<std::string>& specs) {
     std::vector<sim::StressMethod> methods;
     for (const std::string& spec : specs) {
         std::string error;
@@ -136,8 +123,7 @@ std::vector<sim::StressMethod> parseMethods(const std::vector<std::string>& spec
     return methods;
 }
 
-// The scenarios of --scenarios and --ci (all when neither names one), each once; an unknown name is a usage error.
-std::vector<const sim::StressScenario*> pickScenarios(const StressCli& opt) {
+std::vector<const sim::StressScenario*> pickStressScenarios(const StressCli& opt) {
     std::vector<std::string> names = opt.scenarios;
     if (opt.ci)
         for (std::string_view n : sim::stressCiScenarios()) names.emplace_back(n);
@@ -153,8 +139,7 @@ std::vector<const sim::StressScenario*> pickScenarios(const StressCli& opt) {
     return scenarios;
 }
 
-// The bundled humanoid when a scenario needs it and --base has it; its scenarios are skipped otherwise.
-sim::StressContent loadContent(const StressCli& opt, const std::vector<const sim::StressScenario*>& scenarios) {
+sim::StressContent loadStressContent(const StressCli& opt, const std::vector<const sim::StressScenario*>& scenarios) {
     sim::StressContent content;
     bool needsHumanoid = false;
     for (const sim::StressScenario* s : scenarios) needsHumanoid = needsHumanoid || s->needsHumanoid;
@@ -170,6 +155,8 @@ sim::StressContent loadContent(const StressCli& opt, const std::vector<const sim
     }
     return content;
 }
+
+namespace {
 
 // Each failing cell with its first failing run (the lowest yaw), then the count; every run is in stress.md.
 void printFailures(const std::vector<sim::StressResult>& results, int yaws) {
@@ -191,10 +178,10 @@ void printFailures(const std::vector<sim::StressResult>& results, int yaws) {
 }
 
 int stressCommand(const StressCli& opt) {
-    const std::vector<sim::StressMethod> methods = parseMethods(opt.methods);
-    const std::vector<const sim::StressScenario*> scenarios = pickScenarios(opt);
+    const std::vector<sim::StressMethod> methods = parseStressMethods(opt.methods);
+    const std::vector<const sim::StressScenario*> scenarios = pickStressScenarios(opt);
     if (methods.empty() || scenarios.empty()) usageError("no methods or no scenarios");
-    const sim::StressContent content = loadContent(opt, scenarios);
+    const sim::StressContent content = loadStressContent(opt, scenarios);
     std::error_code ec;
     std::filesystem::create_directories(opt.out, ec);
     if (ec) {
@@ -206,24 +193,13 @@ int stressCommand(const StressCli& opt) {
                 opt.yaws == 1 ? "" : "s", opt.threads, opt.out.string().c_str());
     std::fflush(stdout);
     const bool tty = ::isatty(STDERR_FILENO) != 0;
-    const sim::StressThresholds thresholds;
     const std::vector<sim::StressResult> results =
-        sim::runStressMatrix(scenarios, methods, content, thresholds, opt.threads, opt.yaws, [&](int done, int total) {
+        sim::runStressMatrix(scenarios, methods, content, {}, opt.threads, opt.yaws, [&](int done, int total) {
             if (!tty) return;
             std::fprintf(stderr, "\r  %d/%d runs%s", done, total, done == total ? "\n" : "");
             std::fflush(stderr);
         });
-    std::ofstream(opt.out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
-    std::ofstream(opt.out / "stress.json") << sim::stressJson(results, methods, thresholds);
-    std::vector<std::string> scenarioNames;
-    for (const sim::StressScenario* s : scenarios) scenarioNames.push_back(s->name);
-    std::string plotError = writeHeatMap(opt.out, results, methods, scenarioNames);
-    if (plotError.empty()) plotError = runGnuplot(opt.out, "stress.gp");
-    std::printf("\n%s", sim::stressTable(results, methods).c_str());
-    printFailures(results, opt.yaws);
-    if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
-    std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", opt.out.string().c_str(),
-                plotError.empty() ? ",stress.png" : "");
+    writeStressOutputs(opt.out, results, methods, scenarios, opt.yaws);
     return 0;
 }
 
@@ -251,6 +227,23 @@ void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
         }
         exitCode = stressCommand(*opt);
     });
+}
+
+void writeStressOutputs(const std::filesystem::path& out, const std::vector<sim::StressResult>& results,
+                        const std::vector<sim::StressMethod>& methods,
+                        const std::vector<const sim::StressScenario*>& scenarios, int yaws) {
+    const sim::StressThresholds thresholds;
+    std::ofstream(out / "stress.md") << sim::stressMarkdown(results, methods, thresholds);
+    std::ofstream(out / "stress.json") << sim::stressJson(results, methods, thresholds);
+    std::vector<std::string> scenarioNames;
+    for (const sim::StressScenario* s : scenarios) scenarioNames.push_back(s->name);
+    std::string plotError = writeHeatMap(out, results, methods, scenarioNames);
+    if (plotError.empty()) plotError = runGnuplot(out, "stress.gp");
+    std::printf("\n%s", sim::stressTable(results, methods).c_str());
+    printFailures(results, yaws);
+    if (!plotError.empty()) std::cerr << "afb stress: warning: no stress.png: " << plotError << "\n";
+    std::printf("wrote %s/{stress.md,stress.json,stress.gp,stress.dat%s}\n", out.string().c_str(),
+                plotError.empty() ? ",stress.png" : "");
 }
 
 } // namespace afb::cli

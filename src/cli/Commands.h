@@ -33,6 +33,12 @@ void addMethodsCommand(CLI::App& app, int& exitCode);
 /// Registers `afb gen`.
 void addGenCommand(CLI::App& app, int& exitCode);
 
+/// Registers `afb plan`, `afb run` and `afb merge`: a command's runs spread over processes and machines (Batch.h);
+/// `argv` is kept to re-run the sibling binary of the other Bullet precision.
+void addPlanCommand(CLI::App& app, int& exitCode, char** argv);
+void addRunCommand(CLI::App& app, int& exitCode, char** argv);
+void addMergeCommand(CLI::App& app, int& exitCode, char** argv);
+
 /// Replaces this process by the sibling binary built against the other Bullet precision ("afb" for float,
 /// "afb-double" for double) with the same arguments: the two builds cannot share a process. Returns only when
 /// that fails, after printing why (`command` names the caller in the message).

@@ -31,7 +31,7 @@ std::string versionLine() {
 
 int main(int argc, char** argv) {
     CLI::App app{"afb — Doom 3 articulated figures (.af) on Bullet: parse, format, resolve, inspect, drop, "
-                 "golden, draw, chart, stress, gen, methods.\n"
+                 "golden, draw, chart, stress, gen, methods; plan, run, merge.\n"
                  "Diagnostics go to stderr as file:line:col: error: message. Exit code 0 on success, 1 on a failed "
                  "check or bad input, 2 on a command line that makes no sense. A report written to '-' goes to "
                  "stdout alone; the human text goes to stderr then."};
@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
     afb::cli::addStressCommand(app, exitCode, argv);
     afb::cli::addGenCommand(app, exitCode);
     afb::cli::addMethodsCommand(app, exitCode);
+    afb::cli::addPlanCommand(app, exitCode, argv);
+    afb::cli::addRunCommand(app, exitCode, argv);
+    afb::cli::addMergeCommand(app, exitCode, argv);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

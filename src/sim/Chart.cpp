@@ -68,14 +68,30 @@ std::optional<ChartMethod> parseChartMethod(std::string_view spec, std::string& 
     return ChartMethod{std::string(spec), *method};
 }
 
-std::vector<ChartRun> runChart(const std::vector<figure::Figure>& figures, const ChartOptions& o,
-                               const std::function<void(int, int)>& progress) {
+std::vector<ChartRun> chartRuns(std::size_t figures, const ChartOptions& o) {
     std::vector<ChartRun> runs;
-    for (std::size_t f = 0; f < figures.size(); ++f)
+    for (std::size_t f = 0; f < figures; ++f)
         for (const ChartMethod& m : o.methods)
             for (double h : o.heightsM)
                 for (double hz : o.hz)
                     for (int r = 0; r < std::max(1, o.repeats); ++r) runs.push_back({m.label, f, h, hz, r, {}});
+    return runs;
+}
+
+DropOptions chartDropOptions(const ChartOptions& o, const ChartRun& run, const bullet::Method& method) {
+    DropOptions d;
+    d.heightM = run.heightM;
+    d.hz = run.hz;
+    d.count = std::max(1, o.count);
+    d.seconds = o.seconds;
+    d.sleeping = o.sleeping;
+    d.method = method;
+    return d;
+}
+
+std::vector<ChartRun> runChart(const std::vector<figure::Figure>& figures, const ChartOptions& o,
+                               const std::function<void(int, int)>& progress) {
+    std::vector<ChartRun> runs = chartRuns(figures.size(), o);
     std::vector<bullet::Method> methodOf;
     for (const ChartRun& run : runs)
         for (const ChartMethod& m : o.methods)
@@ -100,14 +116,7 @@ std::vector<ChartRun> runChart(const std::vector<figure::Figure>& figures, const
         for (std::size_t k = next++; k < order.size(); k = next++) {
             const std::size_t i = order[k];
             ChartRun& run = runs[i];
-            DropOptions d;
-            d.heightM = run.heightM;
-            d.hz = run.hz;
-            d.count = std::max(1, o.count);
-            d.seconds = o.seconds;
-            d.sleeping = o.sleeping;
-            d.method = methodOf[i];
-            run.result = runDrop(figures[run.figure], d);
+            run.result = runDrop(figures[run.figure], chartDropOptions(o, run, methodOf[i]));
             const std::lock_guard lock(mutex);
             ++done;
             finished.notify_one();

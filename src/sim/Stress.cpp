@@ -31,8 +31,7 @@ std::string fixed(double v, int digits) {
     return buf;
 }
 
-// Run k of n turns its scenario by k·360°/n.
-double yawDegOf(std::size_t k, std::size_t n) { return 360.0 * static_cast<double>(k) / static_cast<double>(n); }
+double yawDegOf(std::size_t k, std::size_t n) { return stressYawDeg(k, n); }
 
 // The run's state while it steps: the worst values, the first failure, the rest window.
 struct Judge {
@@ -406,17 +405,8 @@ std::vector<StressResult> runStressMatrix(const std::vector<const StressScenario
     auto work = [&] {
         for (std::size_t i = next++; i < total; i = next++) {
             const std::size_t k = i % yawCount, m = i / yawCount % methods.size(), s = i / yawCount / methods.size();
-            const std::optional<StressSetup>& setup = setups[s * yawCount + k];
-            StressResult r;
-            if (setup) r = runStress(*setup, methods[m], thresholds);
-            else {
-                r.method = methods[m].label;
-                r.cause = StressCause::Skipped;
-                r.detail = "needs the bundled humanoid (--base)";
-            }
-            r.scenario = scenarios[s]->name;
-            r.yawDeg = yawDegOf(k, yawCount);
-            results[i] = std::move(r);
+            results[i] = runStressRun(setups[s * yawCount + k], scenarios[s]->name, methods[m], thresholds,
+                                      yawDegOf(k, yawCount));
             ++done;
         }
     };

@@ -199,3 +199,12 @@ add_test(NAME smoke.matrix
   COMMAND bash ${PROJECT_SOURCE_DIR}/cmake/smoke.sh $<TARGET_FILE:afb> ${CMAKE_CURRENT_BINARY_DIR}/smoke
   WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(smoke.matrix PROPERTIES TIMEOUT 900)
+
+# afb plan, run and merge: merged outputs equal the one-process commands' (timings aside), missing results named,
+# --resume, a run killed midway, refused results and inputs; GNU parallel when installed (tests/cli/batch.sh).
+find_program(AFB_BASH bash)
+if(AFB_BASH)
+  add_test(NAME cli.batch
+    COMMAND ${AFB_BASH} ${CMAKE_CURRENT_LIST_DIR}/batch.sh $<TARGET_FILE:afb> ${PROJECT_SOURCE_DIR}
+            ${CMAKE_CURRENT_BINARY_DIR}/batch)
+endif()

@@ -47,6 +47,12 @@ struct ChartRun {
     DropResult result;
 };
 
+/// The runs of the matrix, results empty: for each of `figures` figures, method, height, rate and repeat, in that
+/// nesting order (runChart's order).
+std::vector<ChartRun> chartRuns(std::size_t figures, const ChartOptions& options);
+/// The drop of one run of the matrix, with `method` (the run's ChartMethod's).
+DropOptions chartDropOptions(const ChartOptions& options, const ChartRun& run, const bullet::Method& method);
+
 /// Runs the whole matrix: for each figure, method, height, rate and repeat (in that nesting order, which is the
 /// order of the result) one drop. Runs are spread over `options.threads` threads, repeat by repeat (all first
 /// repeats, then all second ones: load on the machine falls on every method alike); every run owns its world,

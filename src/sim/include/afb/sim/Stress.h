@@ -151,6 +151,13 @@ struct StressResult {
 /// Runs one setup with one method (a preset or raw, with any knob overrides). Deterministic for a given build.
 StressResult runStress(const StressSetup& setup, const StressMethod& method, const StressThresholds& thresholds = {});
 
+/// One run of the matrix, as runStressMatrix runs it: `yawed` (the scenario's setup turned by `yawDeg`, or nullopt
+/// when its figures are missing: a Skipped run) with `method`, named by `scenario` and the yaw.
+StressResult runStressRun(const std::optional<StressSetup>& yawed, const std::string& scenario,
+                          const StressMethod& method, const StressThresholds& thresholds, double yawDeg);
+/// The yaw of run k of `yaws` (k·360°/yaws), degrees.
+double stressYawDeg(std::size_t k, std::size_t yaws);
+
 /// Runs every scenario with every method at `yaws` orientations (run k turned by k·360°/yaws, yawedSetup; 1: the
 /// scenario as built) on `threads` worker threads (each run its own world, so results do not depend on the thread
 /// count); scenarios whose figures are missing from `content` are Skipped. Results in scenario-major, then method,

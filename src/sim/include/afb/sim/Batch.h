@@ -1,0 +1,102 @@
+#pragma once
+// Batches beyond one process (`afb plan`, `afb run`, `afb merge`): a run manifest of JSON lines, one line per
+// independent run, and one result file per line, written atomically, read back and checked before a merge.
+// Results carry every number exactly (doubles round-trip; NaN and infinities as text), so a merge of results made
+// in many processes equals the one-process command's output but for the timings.
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afb/sim/Drop.h"
+#include "afb/sim/Stress.h"
+
+namespace afb::sim {
+
+/// FNV-1a, 64 bit: a stable content hash for change detection (not for security).
+std::uint64_t fnv1a(std::string_view data, std::uint64_t hash = 1469598103934665603ull);
+/// `value` as 16 lowercase hex digits.
+std::string hashHex(std::uint64_t value);
+/// The FNV-1a hash of a file's bytes as hex, or "missing" when it cannot be read.
+std::string fileHash(const std::filesystem::path& path);
+
+/// One line of a run manifest: one independent run of a command, with everything needed to run it alone and to
+/// check its result against the others'.
+struct PlannedRun {
+    std::size_t index = 0; ///< the line's position, 0-based (a Slurm array task id)
+    std::size_t runs = 0;  ///< lines in the manifest
+    std::string command;   ///< "stress", "chart", "drop"
+    std::string build;     ///< the planning binary (its `afb --version` line and compiler)
+    std::string precision; ///< "float" or "double": the afb binary that runs the line
+    nlohmann::json plan;   ///< the command's options, the same on every line
+    nlohmann::json inputs; ///< this run's input files: path relative to the content folder → fileHash
+    nlohmann::json run;    ///< this run's own values (entity, method, height, rate, yaw, repeat, …)
+};
+
+/// What a plan writes: the options common to every run, the sets of input files the runs read, and the runs, each
+/// with the index of its input set.
+struct PlanLines {
+    nlohmann::json plan;
+    std::vector<nlohmann::json> inputSets; ///< each {path relative to the content folder: fileHash}
+    std::vector<std::pair<std::size_t, nlohmann::json>> runs;
+};
+/// Writes a manifest: one line per run, index = position. The plan and each input set are serialised once.
+void writeManifest(std::ostream& out, const std::string& command, const std::string& build,
+                   const std::string& precision, const PlanLines& lines);
+
+/// A manifest read back: its line count and the lines selected.
+struct Manifest {
+    std::size_t runs = 0;
+    std::vector<PlannedRun> lines; ///< in index order
+};
+/// Reads the lines of `path` for which `want(index)` is true (every line is counted, only those are parsed).
+/// On a malformed line returns nullopt with `error` as "FILE:LINE:COL: error: …".
+std::optional<Manifest> readManifest(const std::filesystem::path& path, const std::function<bool(std::size_t)>& want,
+                                     std::string& error);
+/// Parses one manifest line (`where` prefixes the error: "FILE:LINE").
+std::optional<PlannedRun> parseManifestLine(std::string_view line, const std::string& where, std::string& error);
+/// A planned run as its manifest line (no newline), as writeManifest writes it.
+nlohmann::json manifestLineJson(const PlannedRun& run);
+
+/// Where the result of line `index` goes: DIR/run-000042.json (six digits or more).
+std::filesystem::path resultPath(const std::filesystem::path& dir, std::size_t index);
+/// Writes `text` to `path` atomically: a temporary file in the same folder, flushed, then renamed over `path`. A
+/// process killed before the rename leaves no file at `path` (only a hidden `.run-*.tmp.*` file, ignored by
+/// readResults). Returns an error message, or an empty string.
+std::string writeAtomically(const std::filesystem::path& path, const std::string& text);
+
+/// One result file read back.
+struct RunResult {
+    PlannedRun line;            ///< the manifest line it ran
+    nlohmann::json inputsSeen;  ///< the input hashes the run found
+    nlohmann::json result;      ///< the command's result (exact)
+    std::filesystem::path file; ///< where it was read from
+};
+/// A result file's text: the line, the inputs seen and the result.
+std::string resultFileText(const PlannedRun& line, const nlohmann::json& inputsSeen, const nlohmann::json& result,
+                           double wallSeconds);
+/// Every result file of `dir` (run-*.json), by index. Files that do not parse are errors ("FILE: error: …").
+std::map<std::size_t, RunResult> readResults(const std::filesystem::path& dir, std::vector<std::string>& errors);
+
+/// A number written exactly: finite doubles as JSON numbers (shortest round-trip form), NaN and infinities as the
+/// strings "nan", "inf", "-inf" (JSON has no such numbers).
+nlohmann::json exactNumber(double value);
+/// Reads exactNumber's output; throws nlohmann::json::exception on anything else.
+double fromExactNumber(const nlohmann::json& value);
+
+/// A stress run, exactly (every field).
+nlohmann::json stressResultExact(const StressResult& result);
+StressResult stressResultFromExact(const nlohmann::json& json);
+/// A drop result, exactly (every field, the method by its knobs, the final pose and body frames).
+nlohmann::json dropResultExact(const DropResult& result);
+/// Reads dropResultExact's output; throws nlohmann::json::exception (or std::runtime_error for a bad method).
+DropResult dropResultFromExact(const nlohmann::json& json);
+
+} // namespace afb::sim
