@@ -29,7 +29,7 @@ models=(
   "doom3-kroom3/base/models/md5/weapons/pistol_world/worldpistol.md5mesh|"
   "doom3-kroom3/base/models/md5/weapons/shotgun_world/worldshotgun.md5mesh|"
 )
-json_number() { grep -o "\"$1\": [-0-9.e]*" "$2" | head -n 1 | sed 's/.*: //'; }
+json_number() { { grep -o "\"$1\": [-0-9.e]*" "$2" || true; } | head -n 1 | sed 's/.*: //'; }
 echo "| model | options | bodies | mass kg | warnings (stray vertices) | 1 m drop |"
 echo "|---|---|---|---|---|---|"
 for entry in "${models[@]}"; do
@@ -42,13 +42,13 @@ for entry in "${models[@]}"; do
   # shellcheck disable=SC2086 # the options are words
   if ! "$afb" gen "$corpus/$model" --out "$dir" --name "$name" $options --json >"$out/$name.gen.json" \
       2>"$out/$name.gen.err"; then
-    echo "| $(basename "$model") | $options | - | - | $(grep -m1 -o 'error: .*' "$out/$name.gen.err" | cut -c8-) | - |"
+    echo "| $(basename "$model") | $options | - | - | $({ grep -m1 -o 'error: .*' "$out/$name.gen.err" || true; } | cut -c8-) | - |"
     continue
   fi
   bodies=$(grep -c '"joints": [0-9]' "$out/$name.gen.json" || true)
   mass=$(json_number totalMassKg "$out/$name.gen.json")
   warnings=$(grep -c 'warning:' "$out/$name.gen.err" || true)
-  stray=$(grep -o 'warning: [0-9]* of the' "$out/$name.gen.err" | awk '{s += $2} END {print s + 0}')
+  stray=$({ grep -o 'warning: [0-9]* of the' "$out/$name.gen.err" || true; } | awk '{s += $2} END {print s + 0}')
   if "$afb" drop --base "$dir" "$name" --height 1 --seconds 15 --stop-at-rest --json "$out/$name.drop.json" \
       >/dev/null 2>"$out/$name.drop.err"; then
     settle=$(json_number settle_time_s "$out/$name.drop.json")

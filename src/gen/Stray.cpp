@@ -13,6 +13,9 @@ namespace {
 constexpr double kMetresPerUnit = 0.0254;
 constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median
 constexpr double kMadToSigma = 1.4826;      // the median absolute deviation of a normal distribution, in σ
+// A vertex this close to its bone's median distance, as a fraction of the model's height, is never stray: a bone
+// whose skin hugs it (a median near zero) would otherwise lose its next ring of vertices.
+constexpr double kMinStrayFraction = 0.1;
 
 double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     const Eigen::Vector3d ab = b - a;
@@ -47,7 +50,7 @@ struct Sample {
 };
 
 // The far vertices of one bone's samples, marked in `stray`, with a report when there are any.
-void markFar(const std::vector<Sample>& samples, double factor, std::vector<std::vector<bool>>& stray,
+void markFar(const std::vector<Sample>& samples, double factor, double height, std::vector<std::vector<bool>>& stray,
              StrayVertices& report) {
     std::vector<double> d;
     for (const Sample& s : samples) d.push_back(s.distance);
@@ -57,7 +60,7 @@ void markFar(const std::vector<Sample>& samples, double factor, std::vector<std:
     // The spread never counts as less than half the median: a bone whose vertices sit all at one radius (a tube
     // round it) has a deviation near zero, and the next ring out is no prop.
     const double spread = std::max(kMadToSigma * median(deviation), m / 2);
-    const double limit = m + factor * spread;
+    const double limit = m + std::max(factor * spread, kMinStrayFraction * height);
     report.boneVertices = static_cast<int>(samples.size());
     report.medianM = m * kMetresPerUnit;
     report.limitM = limit * kMetresPerUnit;
@@ -101,6 +104,7 @@ std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rul
         }
     }
     if (!(rules.strayFactor > 0)) return stray;
+    const double height = modelHeight(rig);
     for (std::size_t j = 0; j < n; ++j) {
         std::vector<Sample>& samples = byJoint[j];
         if (samples.size() < kMinBoneVertices) continue;
@@ -118,7 +122,7 @@ std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rul
         }
         StrayVertices r;
         r.joint = rig.joints[j].name;
-        markFar(samples, rules.strayFactor, stray, r);
+        markFar(samples, rules.strayFactor, height, stray, r);
         if (r.vertices > 0) report.push_back(r);
     }
     return stray;

@@ -45,8 +45,9 @@ struct GenRules {
     /// case-insensitive): props modelled as meshes of their own. Their vertices still follow their bones.
     std::vector<std::string> skipSurfaces;
     /// A vertex is not fitted when it lies farther from the bone that weighs it most than that bone's median
-    /// vertex distance + strayFactor × the larger of (1.4826 × the distances' median absolute deviation) and half
-    /// the median: a prop or attachment weighted to a body bone (see strayVertices). 0 turns the rule off.
+    /// vertex distance + the larger of strayFactor × max(1.4826 × the distances' median absolute deviation, half the
+    /// median) and a tenth of the model's height: a prop or attachment weighted to a body bone (see
+    /// strayVertices). 0 turns the rule off.
     double strayFactor = 6;
     /// A bone whose vertices and length (to its farthest child joint) both span less than this fraction of the
     /// model's height merges into its parent's body.
