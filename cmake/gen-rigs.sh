@@ -52,8 +52,7 @@ for entry in "${models[@]}"; do
   if "$afb" drop --base "$dir" "$name" --height 1 --seconds 15 --stop-at-rest --json "$out/$name.drop.json" \
       >/dev/null 2>"$out/$name.drop.err"; then
     settle=$(json_number settle_time_s "$out/$name.drop.json")
-    drop="settles at ${settle:-?} s"
-    [[ -z "$settle" ]] && drop="no explosion, still moving at 15 s"
+    if [[ -n "$settle" ]]; then drop="settles at $(printf '%.2f' "$settle") s"; else drop="still moving at 15 s"; fi
   else
     drop="**exploded** or failed (see $out/$name.drop.err)"
   fi
