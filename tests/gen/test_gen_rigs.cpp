@@ -46,7 +46,7 @@ std::optional<afb::gen::Generated> generate(const afb::gen::Rig& rig, afb::text:
 
 } // namespace
 
-TEST_CASE("gen: an md5mesh one unit tall is read as metres; --unit-m and --height override", "[gen]") {
+TEST_CASE("gen: an md5mesh one unit tall is read as metres, and --unit-m and --height override that", "[gen]") {
     afb::text::Diagnostics diags;
     const auto rig = afb::gen::importRig(tinyMetres(), {}, diags);
     INFO(diags.str());
