@@ -34,11 +34,53 @@ struct GenCliOptions {
     bool json = false;
 };
 
+const char* unitSourceName(gen::RigUnits::Source s) {
+    switch (s) {
+    case gen::RigUnits::Source::Format: return "format";
+    case gen::RigUnits::Source::Option: return "unit-m";
+    case gen::RigUnits::Source::Height: return "height";
+    case gen::RigUnits::Source::Detected: return "detected";
+    }
+    return "?";
+}
+
+// The scale afb gen chose by itself, said once on stderr (as compilers' notes).
+void noteDetectedUnits(const gen::Rig& rig, const std::filesystem::path& model) {
+    if (rig.units.source != gen::RigUnits::Source::Detected) return;
+    std::fprintf(stderr,
+                 "%s: note: the model is %.3g m tall at Doom's 0.0254 m per unit (%.3g in its own units): read as %g m "
+                 "per unit, %.3g m tall; --unit-m or --height sets the scale\n",
+                 model.string().c_str(), rig.units.fileHeight * 0.0254, rig.units.fileHeight, rig.units.metresPerUnit,
+                 rig.units.fileHeight * rig.units.metresPerUnit);
+}
+
+nlohmann::json unitsJson(const gen::RigUnits& u) {
+    return {{"metresPerUnit", u.metresPerUnit},
+            {"source", unitSourceName(u.source)},
+            {"up", std::string(1, u.up)},
+            {"heightM", u.fileHeight * u.metresPerUnit}};
+}
+
+nlohmann::json strayJson(const std::vector<gen::StrayVertices>& stray) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& s : stray)
+        out.push_back({{"joint", s.joint},
+                       {"surface", s.surface},
+                       {"vertices", s.vertices},
+                       {"nearestM", s.nearestM},
+                       {"farthestM", s.farthestM},
+                       {"medianM", s.medianM},
+                       {"limitM", s.limitM}});
+    return out;
+}
+
 int runGen(const GenCliOptions& opt) {
     text::Diagnostics diags;
     gen::GenOptions options;
     options.name = opt.name.empty() ? gen::figureNameFor(opt.model) : opt.name;
     options.massKg = opt.massKg;
+    options.source = opt.model.string();
+    options.outDir = opt.out.string();
     if (!opt.rules.empty()) {
         auto rules = gen::loadRules(opt.rules, diags);
         if (!rules) {
@@ -52,7 +94,11 @@ int runGen(const GenCliOptions& opt) {
     import.heightM = opt.heightM;
     if (!opt.up.empty()) import.up = opt.up[0];
     std::optional<gen::Generated> generated;
-    if (auto rig = gen::importRig(opt.model, import, diags)) generated = gen::generateFigure(*rig, options, diags);
+    const auto rig = gen::importRig(opt.model, import, diags);
+    if (rig) {
+        noteDetectedUnits(*rig, opt.model);
+        generated = gen::generateFigure(*rig, options, diags);
+    }
     if (generated && !gen::writeContent(*generated, opt.out, diags)) generated.reset();
     printDiagnostics(diags);
     if (!generated) {
@@ -76,8 +122,10 @@ int runGen(const GenCliOptions& opt) {
         std::cout << nlohmann::json{{"name", generated->name},
                                     {"totalMassKg", generated->totalMassKg},
                                     {"files", {paths.af, paths.def, paths.mesh, paths.afPose}},
+                                    {"units", unitsJson(rig->units)},
                                     {"bodies", bodies},
-                                    {"constraints", joints}}
+                                    {"constraints", joints},
+                                    {"stray", strayJson(generated->stray)}}
                          .dump(2)
                   << "\n";
         return 0;
@@ -136,8 +184,8 @@ void addGenCommand(CLI::App& app, int& exitCode) {
         ->check(within(0.01, 1e5));
     cmd->add_option("--rules", opt->rules, "JSON rules overriding the built-in humanoid template (README: afb gen)");
     cmd->add_option("--unit-m", opt->unitM,
-                    "Metres per model unit (default by format: md5 0.0254, glTF 1, FBX "
-                    "0.01 x UnitScaleFactor, others 0.0254)")
+                    "Metres per model unit (default by format: md5 0.0254, or 1 for an md5mesh under 0.2 m tall at "
+                    "0.0254, with a note; glTF 1, FBX 0.01 x UnitScaleFactor, others 0.0254)")
         ->check(within(1e-9, 1e9));
     cmd->add_option("--height", opt->heightM, "Scale the model to this height (its largest extent), metres")
         ->check(within(0.01, 100.0));

@@ -131,12 +131,23 @@ void fitShape(BodyFit& body, const std::vector<std::string>& shapes) {
 } // namespace
 
 std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
-                               const std::vector<bool>& skipped,
-                               const std::vector<std::vector<Eigen::Vector3d>>& owned);
+                               const std::vector<bool>& skipped, const std::vector<std::vector<Eigen::Vector3d>>& owned,
+                               const VertexMask& stray);
 
-std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
+// The model's height as fitting sees it: modelHeight without the stray vertices.
+double fittedHeight(const Rig& rig, const VertexMask& stray) {
+    std::vector<Eigen::Vector3d> points;
+    for (std::size_t si = 0; si < rig.surfaces.size(); ++si)
+        for (std::size_t vi = 0; vi < rig.surfaces[si].vertices.size(); ++vi)
+            if (!stray[si][vi]) points.push_back(rig.surfaces[si].vertices[vi].position);
+    if (points.empty())
+        for (const auto& j : rig.joints) points.push_back(j.bind.position);
+    return std::max(extentOf(points), 1e-6);
+}
+
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray) {
     const int n = static_cast<int>(rig.joints.size());
-    const double height = std::max(modelHeight(rig), 1e-6);
+    const double height = fittedHeight(rig, stray);
     const auto mergeRe = compile(rules.merge);
     const auto keepRe = compile(rules.keep);
     const auto skipRe = compile(rules.skip);
@@ -147,8 +158,10 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
     for (int j = 0; j < n; ++j)
         skipped[static_cast<std::size_t>(j)] = matchesAny(skipRe, rig.joints[static_cast<std::size_t>(j)].name);
     std::size_t vertexCount = 0;
-    for (const auto& s : rig.surfaces)
-        for (const auto& v : s.vertices) {
+    for (std::size_t si = 0; si < rig.surfaces.size(); ++si)
+        for (std::size_t vi = 0; vi < rig.surfaces[si].vertices.size(); ++vi) {
+            const RigVertex& v = rig.surfaces[si].vertices[vi];
+            if (stray[si][vi]) continue;
             ++vertexCount;
             const auto top =
                 std::max_element(v.influences.begin(), v.influences.end(),
@@ -225,7 +238,7 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
     // Fit, then merge the body of least relative volume into its parent while that ratio is under minVolumeRatio
     // (the figure layer warns from 10:1 mass ratios across a joint; one density makes mass ratios volume ratios).
     for (;;) {
-        std::vector<BodyFit> bodies = fitGroups(rig, rules, group, skipped, owned);
+        std::vector<BodyFit> bodies = fitGroups(rig, rules, group, skipped, owned, stray);
         int worst = -1;
         double worstRatio = rules.minVolumeRatio;
         for (std::size_t i = 1; i < bodies.size(); ++i) {
@@ -253,10 +266,10 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules) {
 }
 
 std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
-                               const std::vector<bool>& skipped,
-                               const std::vector<std::vector<Eigen::Vector3d>>& owned) {
+                               const std::vector<bool>& skipped, const std::vector<std::vector<Eigen::Vector3d>>& owned,
+                               const VertexMask& stray) {
     const int n = static_cast<int>(rig.joints.size());
-    const double height = std::max(modelHeight(rig), 1e-6);
+    const double height = fittedHeight(rig, stray);
     // Bodies in joint order of their heads; the base body first.
     std::vector<BodyFit> bodies;
     std::map<int, int> bodyOfHead;
@@ -271,8 +284,10 @@ std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std:
         bodies[static_cast<std::size_t>(bodyOfHead.at(group[static_cast<std::size_t>(j)]))].joints.push_back(j);
     // A vertex is fitted by the body whose bones weigh it most together, when they weigh it at least the threshold
     // (a vertex shared evenly between two bodies bends with both and belongs to neither's shape).
-    for (const auto& s : rig.surfaces)
-        for (const auto& v : s.vertices) {
+    for (std::size_t si = 0; si < rig.surfaces.size(); ++si)
+        for (std::size_t vi = 0; vi < rig.surfaces[si].vertices.size(); ++vi) {
+            const RigVertex& v = rig.surfaces[si].vertices[vi];
+            if (stray[si][vi]) continue;
             std::map<int, double> byBody;
             for (const RigInfluence& in : v.influences)
                 if (!skipped[static_cast<std::size_t>(in.joint)])

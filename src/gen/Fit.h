@@ -27,7 +27,11 @@ struct BodyFit {
     Eigen::Vector3d direction = Eigen::Vector3d::UnitZ(); ///< from the head joint toward the body (unit)
 };
 
-/// Groups the rig's joints into bodies (merge rules, size rules, the base body) and fits a shape to each.
-std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules);
+/// Vertices left out of every fit, per surface and vertex (strayVertices).
+using VertexMask = std::vector<std::vector<bool>>;
+
+/// Groups the rig's joints into bodies (merge rules, size rules, the base body) and fits a shape to each, to every
+/// vertex but those set in `stray`.
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray);
 
 } // namespace afb::gen::detail

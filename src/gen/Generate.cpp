@@ -160,6 +160,26 @@ decl::AfConstraint constraintFor(const Rig& rig, const BodyFit& child, const std
     return c;
 }
 
+std::string centimetres(double metres) { return std::to_string(static_cast<long>(std::lround(metres * 100))); }
+
+// One warning per bone (or skipped surface) whose vertices no body is fitted to, naming the model as given.
+void reportStray(const std::vector<StrayVertices>& stray, const std::string& model, text::Diagnostics& diagnostics) {
+    for (const StrayVertices& s : stray) {
+        if (!s.surface.empty()) {
+            diagnostics.warning({model, 0, 0}, "surface \"" + s.surface + "\" (" + std::to_string(s.vertices) +
+                                                   " vertices) is skipped by the rules: no body is fitted to it");
+            continue;
+        }
+        diagnostics.warning({model, 0, 0},
+                            std::to_string(s.vertices) + " of the " + std::to_string(s.boneVertices) +
+                                " vertices weighted to bone \"" + s.joint + "\" lie " + centimetres(s.nearestM) + "-" +
+                                centimetres(s.farthestM) + " cm from it, past " + centimetres(s.limitM) +
+                                " cm (its median " + centimetres(s.medianM) +
+                                " cm): a prop or attachment? no body is fitted to them (rules: strayFactor, "
+                                "skipSurfaces)");
+    }
+}
+
 } // namespace
 
 std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& options, text::Diagnostics& diagnostics) {
@@ -175,7 +195,9 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     out.afPose = bindPoseAnim(rig, commandline);
     out.modelOffset = rig.joints[0].bind.position;
 
-    const std::vector<BodyFit> fits = detail::fitBodies(rig, options.rules);
+    const detail::VertexMask stray = strayVertices(rig, options.rules, out.stray);
+    reportStray(out.stray, options.source.empty() ? options.name : options.source, diagnostics);
+    const std::vector<BodyFit> fits = detail::fitBodies(rig, options.rules, stray);
     const Eigen::Vector3d forward = forwardOf(rig, options.rules);
     double totalVolume = 0;
     for (const BodyFit& b : fits) totalVolume += b.volume;
@@ -189,8 +211,10 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
 
     decl::AfDecl& af = out.af;
     af.name = options.name;
-    // Findings name the file the decl is written to (and the body or constraint).
-    const text::SourceLocation written{contentPaths(options.name).af, 0, 0};
+    // Findings name the file the decl is written to (and the body or constraint), under the folder as given.
+    const std::string afPath = contentPaths(options.name).af;
+    const text::SourceLocation written{
+        options.outDir.empty() ? afPath : (std::filesystem::path(options.outDir) / afPath).string(), 0, 0};
     af.location = written;
     decl::AfSettings settings;
     settings.model = "model_" + options.name;

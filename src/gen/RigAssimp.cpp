@@ -318,6 +318,12 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
     }
     for (RigSurface& s : rig.surfaces)
         for (RigVertex& v : s.vertices) v.position = axes * (scale * v.position);
+    rig.units.metresPerUnit = metres;
+    rig.units.source = options.heightM         ? RigUnits::Source::Height
+                       : options.metresPerUnit ? RigUnits::Source::Option
+                                               : RigUnits::Source::Format;
+    rig.units.fileHeight = extent;
+    rig.units.up = options.up.value_or('y');
     return rig;
 }
 
@@ -351,11 +357,7 @@ std::optional<Rig> importRig(const std::filesystem::path& path, const ImportOpti
     if (ext == "md5mesh") {
         auto mesh = decl::loadMd5Mesh(path, diagnostics);
         if (!mesh) return std::nullopt;
-        Rig rig = rigFromMd5(*mesh);
-        if (options.metresPerUnit || options.heightM || options.up.value_or('z') != 'z')
-            diagnostics.warning({path.string(), 0, 0}, "an md5mesh is used in Doom units, Z up: --unit-m, --height "
-                                                       "and --up are ignored for it");
-        return rig;
+        return rigFromMd5(*mesh, options, path.string(), diagnostics);
     }
     const std::string label = path.string();
     std::error_code ec;

@@ -18,6 +18,40 @@ bool namesEqualIgnoringCase(const std::string& a, const std::string& b) {
            });
 }
 
+constexpr double kMetresPerDoomUnit = 0.0254;
+constexpr double kMaxModelM = 100;
+
+// The largest extent of the mesh's joints and bind-pose vertices, in its own units.
+double md5Height(const decl::Md5Mesh& mesh) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const decl::Md5Joint& j : mesh.joints) {
+        lo = lo.cwiseMin(fromVec3(j.position));
+        hi = hi.cwiseMax(fromVec3(j.position));
+    }
+    for (const auto& surface : skinnedBindVertices(mesh))
+        for (const Eigen::Vector3d& p : surface) {
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+        }
+    const double extent = (hi - lo).maxCoeff();
+    return std::isfinite(extent) ? extent : 0.0;
+}
+
+// The mesh scaled by `scale` and turned by `axes` (model → Doom): joints move and turn, weight offsets (in their
+// joint's frame) only scale, so every skinned vertex moves as its joints do.
+decl::Md5Mesh transformedMd5(decl::Md5Mesh mesh, double scale, const Eigen::Matrix3d& axes) {
+    const bool turned = !axes.isIdentity();
+    for (decl::Md5Joint& j : mesh.joints) {
+        j.position = toVec3(axes * (scale * fromVec3(j.position)));
+        if (turned)
+            j.orientation = toVec3(
+                md5Orientation(axes * figure::rotationFromMd5(j.orientation.x, j.orientation.y, j.orientation.z)));
+    }
+    for (decl::Md5SubMesh& m : mesh.meshes)
+        for (decl::Md5Weight& w : m.weights) w.offset = toVec3(scale * fromVec3(w.offset));
+    return mesh;
+}
+
 } // namespace
 
 Eigen::Vector3d md5Orientation(const Eigen::Matrix3d& rotation) {
@@ -93,6 +127,38 @@ Rig rigFromMd5(const decl::Md5Mesh& source) {
         rig.surfaces.push_back(std::move(surface));
     }
     rig.md5 = std::move(mesh);
+    return rig;
+}
+
+std::optional<Rig> rigFromMd5(const decl::Md5Mesh& mesh, const ImportOptions& options, const std::string& label,
+                              text::Diagnostics& diagnostics) {
+    RigUnits units;
+    units.up = options.up.value_or('z');
+    units.fileHeight = md5Height(mesh);
+    if (options.heightM) {
+        if (!(units.fileHeight > 0)) {
+            diagnostics.error({label, 0, 0}, "the model has no extent: it cannot be scaled to a height");
+            return std::nullopt;
+        }
+        units.metresPerUnit = *options.heightM / units.fileHeight;
+        units.source = RigUnits::Source::Height;
+    } else if (options.metresPerUnit) {
+        units.metresPerUnit = *options.metresPerUnit;
+        units.source = RigUnits::Source::Option;
+    } else if (units.fileHeight > 0 && units.fileHeight * kMetresPerDoomUnit < kMd5MetresBelowM) {
+        units.metresPerUnit = 1;
+        units.source = RigUnits::Source::Detected;
+    }
+    if (units.fileHeight * units.metresPerUnit > kMaxModelM) {
+        diagnostics.error({label, 0, 0}, "the model is " + std::to_string(units.fileHeight * units.metresPerUnit) +
+                                             " m large at this scale (at most 100 m): give --unit-m or --height");
+        return std::nullopt;
+    }
+    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+    if (units.up == 'y') axes << 0, 0, 1, 1, 0, 0, 0, 1, 0; // model Y → Doom Z, model Z → Doom X (as assimp's)
+    const double scale = units.metresPerUnit / kMetresPerDoomUnit;
+    Rig rig = scale == 1 && units.up == 'z' ? rigFromMd5(mesh) : rigFromMd5(transformedMd5(mesh, scale, axes));
+    rig.units = units;
     return rig;
 }
 

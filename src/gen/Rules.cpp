@@ -151,7 +151,11 @@ std::optional<GenRules> parseRules(const std::string& json, const std::string& f
             } else if (key == "merge") r.merge = patterns(v, key);
             else if (key == "keep") r.keep = patterns(v, key);
             else if (key == "skip") r.skip = patterns(v, key);
-            else if (key == "minVertexFraction") {
+            else if (key == "skipSurfaces") r.skipSurfaces = patterns(v, key);
+            else if (key == "strayFactor") {
+                r.strayFactor = number(v, key);
+                if (r.strayFactor < 0 || r.strayFactor > 1000) throw RulesError{"\"strayFactor\" must be in [0, 1000]"};
+            } else if (key == "minVertexFraction") {
                 r.minVertexFraction = number(v, key);
                 if (r.minVertexFraction < 0 || r.minVertexFraction >= 1)
                     throw RulesError{"\"minVertexFraction\" must be in [0, 1)"};

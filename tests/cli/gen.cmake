@@ -34,3 +34,17 @@ run_to(1 out "${AFB}" gen "${TMP}/broken.glb" --out "${TMP}/bad")
 if(NOT out MATCHES "broken.glb: error:")
   message(FATAL_ERROR "a broken model was not reported:\n${out}")
 endif()
+
+# Units: a one unit tall md5mesh is read as metres with a note on stderr; --unit-m overrides it without one.
+set(tiny "${SRC}/tests/gen/data/tiny_metres.md5mesh")
+execute_process(COMMAND "${AFB}" gen "${tiny}" --out "${TMP}/tiny" --json RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err MATCHES "tiny_metres.md5mesh: note: the model is 0.0254 m tall at Doom.s 0.0254 m per unit .1 in its own units.: read as 1 m per unit, 1 m tall"
+   OR NOT out MATCHES "\"source\": \"detected\"")
+  message(FATAL_ERROR "the one unit tall md5mesh was not read as metres with a note (exit ${rc}):\n${out}\n${err}")
+endif()
+execute_process(COMMAND "${AFB}" gen "${tiny}" --out "${TMP}/tiny" --unit-m 0.5 --json RESULT_VARIABLE rc
+                OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR err MATCHES "note:" OR NOT out MATCHES "\"source\": \"unit-m\"" OR NOT out MATCHES "\"heightM\": 0.5")
+  message(FATAL_ERROR "--unit-m did not set the md5mesh's scale (exit ${rc}):\n${out}\n${err}")
+endif()

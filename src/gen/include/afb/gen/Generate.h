@@ -41,6 +41,14 @@ struct GenRules {
     /// Bones whose vertices no body is fitted to (weapons, shields, props): they still merge into the parent's body,
     /// which drives them, but do not inflate it.
     std::vector<std::string> skip;
+    /// Surfaces (meshes) no body is fitted to, matched against their name and their material (regular expressions,
+    /// case-insensitive): props modelled as meshes of their own. Their vertices still follow their bones.
+    std::vector<std::string> skipSurfaces;
+    /// A vertex is not fitted when it lies farther from the bone that weighs it most than that bone's median
+    /// vertex distance + the larger of strayFactor × max(1.4826 × the distances' median absolute deviation, half the
+    /// median) and a tenth of the model's height: a prop or attachment weighted to a body bone (see
+    /// strayVertices). 0 turns the rule off.
+    double strayFactor = 6;
     /// A bone whose vertices and length (to its farthest child joint) both span less than this fraction of the
     /// model's height merges into its parent's body.
     double minBodyFraction = 0.08;
@@ -66,10 +74,10 @@ struct GenRules {
 GenRules defaultRules();
 
 /// The default rules with the keys of a JSON file written over them. Keys: weightThreshold, merge, keep, skip,
-/// minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes, densityKgM3, forward ([x, y, z]), joints (a
-/// list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg, tiltDeg, tiltToward, minDeg, maxDeg,
-/// bend, friction}; put before the defaults, so they win), fallback (an object as in joints). An unknown key, a wrong
-/// type or a bad regular expression is an error naming the file.
+/// skipSurfaces, strayFactor, minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes, densityKgM3,
+/// forward ([x, y, z]), joints (a list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg,
+/// tiltDeg, tiltToward, minDeg, maxDeg, bend, friction}; put before the defaults, so they win), fallback (an object as
+/// in joints). An unknown key, a wrong type or a bad regular expression is an error naming the file.
 std::optional<GenRules> loadRules(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 /// The same from JSON text; `fileName` is used in messages.
 std::optional<GenRules> parseRules(const std::string& json, const std::string& fileName,
@@ -80,7 +88,27 @@ struct GenOptions {
     std::string name;             ///< the figure's name: the .af decl, the entityDef, file names
     std::optional<double> massKg; ///< total mass; default rules.densityKgM3 × volume
     GenRules rules = defaultRules();
+    std::string source; ///< the model's path as the user gave it, for messages about it (default: `name`)
+    std::string outDir; ///< the content folder as the user gave it: messages about the written files name it
 };
+
+/// Vertices of one bone that no body is fitted to: far from the bone (GenRules::strayFactor) or on a skipped surface
+/// (GenRules::skipSurfaces). They stay in the written mesh, skinned to their bones as before.
+struct StrayVertices {
+    std::string joint;    ///< the bone that weighs them most
+    std::string surface;  ///< the surface matched by skipSurfaces; empty for strays by distance
+    int vertices = 0;     ///< how many
+    int boneVertices = 0; ///< how many vertices the bone weighs most, these included
+    double nearestM = 0;  ///< their least distance from the bone, metres
+    double farthestM = 0; ///< their greatest distance from the bone, metres
+    double medianM = 0;   ///< the median distance of all the bone's vertices, metres
+    double limitM = 0;    ///< the distance past which a vertex is stray, metres
+};
+
+/// Which vertices (per surface, per vertex) no body is fitted to, by the skipSurfaces and strayFactor rules, and
+/// a report per bone and per skipped surface. A bone's distance is to the segments from its joint to each child
+/// joint (its joint alone for a leaf), at the bind pose; bones weighing fewer than 8 vertices are left alone.
+std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rules, std::vector<StrayVertices>& report);
 
 /// One generated body, for reports and tests.
 struct GeneratedBody {
@@ -110,6 +138,7 @@ struct Generated {
     Eigen::Vector3d modelOffset = Eigen::Vector3d::Zero(); ///< the model decl's offset: the root joint's bind position
     std::vector<GeneratedBody> bodies;
     std::vector<GeneratedJoint> joints;
+    std::vector<StrayVertices> stray; ///< vertices no body was fitted to (reported as warnings too)
     double totalMassKg = 0;
     /// The figure built from `af` on the written skeleton (default units), as loading the folder gives it.
     std::optional<figure::Figure> figure;

@@ -47,6 +47,21 @@ struct RigSurface {
     std::vector<std::array<int, 3>> triangles; ///< indices into vertices
 };
 
+/// How importRig turned a model's units and axes into Doom units, Z up: what `afb gen` reports.
+struct RigUnits {
+    /// Where the scale came from.
+    enum class Source {
+        Format,   ///< the format's default (md5 0.0254, glTF 1, FBX its unit scale factor, others 0.0254)
+        Option,   ///< ImportOptions::metresPerUnit
+        Height,   ///< ImportOptions::heightM
+        Detected, ///< an md5mesh too small for Doom units, read as metres (ImportOptions)
+    };
+    double metresPerUnit = 0.0254; ///< metres per unit of the file, as used
+    Source source = Source::Format;
+    double fileHeight = 0; ///< the model's height in its file's units: the largest extent of its joints and vertices
+    char up = 'z';         ///< the file's up axis as used: 'y' or 'z'
+};
+
 /// A whole rig. Invariants (checked by the loaders): at least one joint, joint 0 is the only root, parents precede
 /// children, every index is in range, every vertex has an influence.
 struct Rig {
@@ -55,23 +70,37 @@ struct Rig {
     /// Set when the rig came from an md5mesh: that mesh, re-indexed if a root joint "origin" was inserted. It is
     /// written back as is (its weights keep their own offsets).
     std::optional<decl::Md5Mesh> md5;
+    RigUnits units; ///< how the file's units and axes were read (set by importRig)
 };
 
 /// How a model's coordinates become Doom units, Z up.
 struct ImportOptions {
     /// Metres per model unit; default by format: md5 0.0254, glTF 1, FBX 0.01 × its UnitScaleFactor, others 0.0254
-    /// (game-scale models, as the Doom, Quake and DirectX exporters wrote them).
+    /// (game-scale models, as the Doom, Quake and DirectX exporters wrote them). An md5mesh under
+    /// kMd5MetresBelowM tall at 0.0254 is read as metres instead (RigUnits::Source::Detected).
     std::optional<double> metresPerUnit;
     /// Scale the model so its bind pose is this tall (largest extent of joints and vertices), metres; wins over
     /// metresPerUnit.
     std::optional<double> heightM;
-    /// The model's up axis: 'y' (assimp's convention, default for everything but md5) or 'z' (md5, default).
+    /// The model's up axis: 'y' (assimp's convention, default for everything but md5: the model's Y becomes Doom's
+    /// Z and its Z Doom's X, forward) or 'z' (md5's default: axes kept).
     std::optional<char> up;
 };
+
+/// An md5mesh whose height (RigUnits::fileHeight) at Doom's 0.0254 m per unit is under this many metres is read as
+/// authored in metres, Blender's unit (its md5 exporters write Blender units as they are): no Doom figure is
+/// that small, and a metre figure of that many units is a large one.
+inline constexpr double kMd5MetresBelowM = 0.2;
 
 /// The rig of an md5mesh: vertex positions skinned in the bind pose. A root joint "origin" at the identity is put
 /// first when the mesh has no joint of that name (Doom's base body drives the first child of "origin").
 Rig rigFromMd5(const decl::Md5Mesh& mesh);
+
+/// The same in Doom units, Z up, from the mesh's own units and up axis as `options` give them or as detected
+/// (kMd5MetresBelowM); the md5 written back is scaled and turned alike. An error naming `label` when the model is
+/// over 100 m at that scale, or has no extent and `options.heightM` asks for one.
+std::optional<Rig> rigFromMd5(const decl::Md5Mesh& mesh, const ImportOptions& options, const std::string& label,
+                              text::Diagnostics& diagnostics);
 
 /// Reads a rigged model: `.md5mesh` through decl::loadMd5Mesh, anything else through assimp, defensively (the scene
 /// is validated and every index checked before use; assimp's exceptions are caught). A model without a bone gets

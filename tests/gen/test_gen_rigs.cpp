@@ -1,0 +1,210 @@
+// afb gen on rigs as they come: the units and up axis of an md5mesh (a one unit tall fixture authored in metres),
+// and vertices far from the bone that weighs them (a prop skinned to the head) left out of the bodies.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+
+#include "TestSupport.h"
+#include "afb/decl/Md5Mesh.h"
+#include "afb/gen/Generate.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using afb::gen::RigUnits;
+constexpr double kMetresPerUnit = 0.0254;
+
+fs::path tinyMetres() { return afb::test::sourceDir() / "tests/gen/data/tiny_metres.md5mesh"; }
+
+// The fixture's joints as its file writes them (metres, Z up).
+const Eigen::Vector3d kHeadInFile(0, 0, 0.8), kLeftThighInFile(0, 0.07, 0.4);
+
+const afb::gen::RigJoint& joint(const afb::gen::Rig& rig, const std::string& name) {
+    for (const auto& j : rig.joints)
+        if (j.name == name) return j;
+    FAIL("no joint " << name);
+    return rig.joints.front();
+}
+
+// Every vertex of the md5mesh afb gen writes, skinned at its bind pose, is where the rig has it.
+double writtenVertexGap(const afb::gen::Rig& rig, const afb::gen::Generated& generated) {
+    const auto skinned = afb::gen::skinnedBindVertices(generated.mesh);
+    double gap = 0;
+    for (std::size_t s = 0; s < rig.surfaces.size(); ++s)
+        for (std::size_t v = 0; v < rig.surfaces[s].vertices.size(); ++v)
+            gap = std::max(gap, (skinned[s][v] - rig.surfaces[s].vertices[v].position).norm());
+    return gap;
+}
+
+std::optional<afb::gen::Generated> generate(const afb::gen::Rig& rig, afb::text::Diagnostics& diags,
+                                            const afb::gen::GenRules& rules = afb::gen::defaultRules()) {
+    afb::gen::GenOptions options;
+    options.name = "test_figure";
+    options.rules = rules;
+    return afb::gen::generateFigure(rig, options, diags);
+}
+
+} // namespace
+
+TEST_CASE("gen: an md5mesh one unit tall is read as metres, and --unit-m and --height override that", "[gen]") {
+    afb::text::Diagnostics diags;
+    const auto rig = afb::gen::importRig(tinyMetres(), {}, diags);
+    INFO(diags.str());
+    REQUIRE(rig);
+    CHECK(rig->units.source == RigUnits::Source::Detected);
+    CHECK(rig->units.metresPerUnit == 1.0);
+    CHECK(rig->units.fileHeight == Approx(1.0));
+    CHECK(afb::gen::modelHeight(*rig) * kMetresPerUnit == Approx(1.0));
+    CHECK((joint(*rig, "head").bind.position * kMetresPerUnit - kHeadInFile).norm() < 1e-9);
+    const auto generated = generate(*rig, diags);
+    REQUIRE(generated);
+    CHECK_FALSE(diags.hasErrors());
+    CHECK(writtenVertexGap(*rig, *generated) < 1e-6);
+    // Five boxes, 25.84 litres: at 500 kg/m³ the bodies that enclose them weigh at least 12.92 kg (rounded to 0.1).
+    CHECK(generated->totalMassKg >= 12.85);
+    CHECK(generated->totalMassKg < 2 * 12.9);
+
+    afb::gen::ImportOptions half;
+    half.metresPerUnit = 0.5;
+    const auto halfRig = afb::gen::importRig(tinyMetres(), half, diags);
+    REQUIRE(halfRig);
+    CHECK(halfRig->units.source == RigUnits::Source::Option);
+    CHECK(afb::gen::modelHeight(*halfRig) * kMetresPerUnit == Approx(0.5));
+    CHECK((joint(*halfRig, "head").bind.position * kMetresPerUnit - 0.5 * kHeadInFile).norm() < 1e-9);
+
+    afb::gen::ImportOptions tall;
+    tall.heightM = 1.8;
+    const auto tallRig = afb::gen::importRig(tinyMetres(), tall, diags);
+    REQUIRE(tallRig);
+    CHECK(tallRig->units.source == RigUnits::Source::Height);
+    CHECK(afb::gen::modelHeight(*tallRig) * kMetresPerUnit == Approx(1.8));
+}
+
+TEST_CASE("gen: a Doom-sized md5mesh keeps Doom units", "[gen]") {
+    afb::text::Diagnostics diags;
+    const auto rig = afb::gen::importRig(afb::test::sourceDir() / "models/md5/humanoid/humanoid.md5mesh", {}, diags);
+    REQUIRE(rig);
+    CHECK(rig->units.source == RigUnits::Source::Format);
+    CHECK(rig->units.metresPerUnit == kMetresPerUnit);
+    CHECK(afb::gen::modelHeight(*rig) == Approx(rig->units.fileHeight));
+}
+
+// --up y: the model's Y becomes Doom's Z (up) and its Z Doom's X (forward), as for every assimp format.
+TEST_CASE("gen: --up y turns an md5mesh as it turns other formats", "[gen]") {
+    afb::text::Diagnostics diags;
+    afb::gen::ImportOptions yUp;
+    yUp.up = 'y';
+    yUp.metresPerUnit = 1;
+    const auto rig = afb::gen::importRig(tinyMetres(), yUp, diags);
+    INFO(diags.str());
+    REQUIRE(rig);
+    CHECK(rig->units.up == 'y');
+    const auto doom = [](const Eigen::Vector3d& file) { return Eigen::Vector3d(file.z(), file.x(), file.y()); };
+    CHECK((joint(*rig, "head").bind.position * kMetresPerUnit - doom(kHeadInFile)).norm() < 1e-9);
+    CHECK((joint(*rig, "l_thigh").bind.position * kMetresPerUnit - doom(kLeftThighInFile)).norm() < 1e-9);
+    // The joints turn with the positions: the written mesh skins to the same vertices.
+    const auto generated = generate(*rig, diags);
+    REQUIRE(generated);
+    CHECK(writtenVertexGap(*rig, *generated) < 1e-6);
+    // Read with Z up (the default), the same file stands 1 m tall; read Y up it lies along Doom's X.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
+    for (const auto& v : rig->surfaces[0].vertices) {
+        lo = lo.cwiseMin(v.position * kMetresPerUnit);
+        hi = hi.cwiseMax(v.position * kMetresPerUnit);
+    }
+    CHECK(hi.x() - lo.x() == Approx(1.0));
+    CHECK(hi.z() - lo.z() == Approx(0.26));
+}
+
+namespace {
+
+// Points on the surface of an axis-aligned box (a 5 × 5 × 5 grid's outer layer: 98 points), Doom units.
+void addBox(afb::gen::RigSurface& s, int joint, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int steps = 4) {
+    for (int i = 0; i <= steps; ++i)
+        for (int j = 0; j <= steps; ++j)
+            for (int k = 0; k <= steps; ++k) {
+                if (i % steps != 0 && j % steps != 0 && k % steps != 0) continue;
+                afb::gen::RigVertex v;
+                v.position = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(i, j, k) / steps);
+                v.influences = {{joint, 1.0}};
+                s.vertices.push_back(v);
+            }
+}
+
+// A pelvis, a chest and a head, each a box of vertices weighted to its bone, and a 3-unit cube skinned to the
+// head 40 units behind it (a prop without a bone of its own), in its own surface.
+afb::gen::Rig propRig() {
+    afb::gen::Rig rig;
+    rig.joints = {{"origin", -1, {}},
+                  {"pelvis", 0, {Eigen::Matrix3d::Identity(), {0, 0, 36}}},
+                  {"chest", 1, {Eigen::Matrix3d::Identity(), {0, 0, 48}}},
+                  {"head", 2, {Eigen::Matrix3d::Identity(), {0, 0, 64}}}};
+    afb::gen::RigSurface body{"body", "models/test/body", {}, {}};
+    addBox(body, 1, {-5, -8, 36}, {5, 8, 48});
+    addBox(body, 2, {-6, -10, 48}, {6, 10, 64});
+    addBox(body, 3, {-4, -3.5, 64}, {4, 3.5, 74});
+    afb::gen::RigSurface prop{"helmet_crest", "models/test/crest", {}, {}};
+    addBox(prop, 3, {-41.5, -1.5, 68.5}, {-38.5, 1.5, 71.5}, 2);
+    rig.surfaces = {body, prop};
+    return rig;
+}
+
+// The three boxes' volume, 6320 units³, at 500 kg/m³.
+const double kMassWithoutPropKg = 500 * 6320 * kMetresPerUnit * kMetresPerUnit * kMetresPerUnit;
+
+} // namespace
+
+TEST_CASE("gen: vertices far from the bone that weighs them are reported and no body is fitted to them", "[gen]") {
+    const afb::gen::Rig rig = propRig();
+    afb::text::Diagnostics diags;
+    const auto generated = generate(rig, diags);
+    REQUIRE(generated);
+    INFO(diags.str());
+    CHECK_FALSE(diags.hasErrors());
+    CHECK(generated->totalMassKg == Approx(kMassWithoutPropKg).epsilon(0.02));
+    REQUIRE(generated->stray.size() == 1);
+    CHECK(generated->stray[0].joint == "head");
+    CHECK(generated->stray[0].vertices == 26);
+    CHECK(generated->stray[0].boneVertices == 98 + 26);
+    CHECK(generated->stray[0].nearestM > generated->stray[0].limitM);
+    CHECK(diags.str().find("26 of the 124 vertices weighted to bone \"head\"") != std::string::npos);
+    // The head's body holds its box and stays clear of the prop (40 units behind it).
+    for (const auto& b : generated->bodies)
+        if (b.joint == "head") CHECK(b.centre.x() > -5);
+
+    // With the rule off, the head's body stretches over the prop: from x = -41.5 to 4, over 5 times its box.
+    afb::gen::GenRules off = afb::gen::defaultRules();
+    off.strayFactor = 0;
+    afb::text::Diagnostics offDiags;
+    const auto stretched = generate(rig, offDiags, off);
+    REQUIRE(stretched);
+    CHECK(stretched->stray.empty());
+    CHECK(stretched->totalMassKg > 1.3 * kMassWithoutPropKg);
+    for (const auto& b : stretched->bodies)
+        if (b.joint == "head") CHECK(b.centre.x() < -15);
+}
+
+TEST_CASE("gen: a surface named by skipSurfaces is not fitted", "[gen]") {
+    afb::text::Diagnostics diags;
+    const auto rules = afb::gen::parseRules(R"({"strayFactor": 0, "skipSurfaces": ["crest"]})", "rules.json", diags);
+    REQUIRE(rules);
+    const auto generated = generate(propRig(), diags, *rules);
+    REQUIRE(generated);
+    CHECK(generated->totalMassKg == Approx(kMassWithoutPropKg).epsilon(0.02));
+    REQUIRE(generated->stray.size() == 1);
+    CHECK(generated->stray[0].surface == "helmet_crest");
+    CHECK(generated->stray[0].vertices == 26);
+    CHECK_FALSE(afb::gen::parseRules(R"({"strayFactor": -1})", "rules.json", diags));
+    CHECK(diags.str().find("rules.json: error: \"strayFactor\" must be in [0, 1000]") != std::string::npos);
+}
+
+// A real rig whose bones carry no prop loses no vertex to the rule (the bundled humanoid: tubes round its bones).
+TEST_CASE("gen: the bundled humanoid has no stray vertices", "[gen]") {
+    afb::text::Diagnostics diags;
+    const auto rig = afb::gen::importRig(afb::test::sourceDir() / "models/md5/humanoid/humanoid.md5mesh", {}, diags);
+    REQUIRE(rig);
+    std::vector<afb::gen::StrayVertices> report;
+    const auto mask = afb::gen::strayVertices(*rig, afb::gen::defaultRules(), report);
+    CHECK(report.empty());
+    REQUIRE(mask.size() == rig->surfaces.size());
+}
