@@ -12,21 +12,49 @@
 namespace afb::cli {
 namespace {
 
-// XML 1.0 text or attribute value: the five special characters escaped, control characters (which XML 1.0 cannot
-// hold at all) written as '?'.
+// The length of the well-formed UTF-8 sequence at s[i], or 0 when there is none (RFC 3629: no overlong forms, no
+// surrogates, nothing past U+10FFFF).
+std::size_t utf8Length(const std::string& s, std::size_t i) {
+    const auto byte = [&](std::size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
+    const unsigned lead = byte(i);
+    std::size_t n = 0;
+    unsigned lo = 0x80, hi = 0xBF; // the allowed range of the second byte
+    if (lead >= 0xC2 && lead <= 0xDF) n = 2;
+    else if (lead >= 0xE0 && lead <= 0xEF) {
+        n = 3;
+        if (lead == 0xE0) lo = 0xA0;
+        if (lead == 0xED) hi = 0x9F;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+        n = 4;
+        if (lead == 0xF0) lo = 0x90;
+        if (lead == 0xF4) hi = 0x8F;
+    }
+    if (n == 0 || byte(i + 1) < lo || byte(i + 1) > hi) return 0;
+    for (std::size_t k = 2; k < n; ++k)
+        if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+    return n;
+}
+
+// XML 1.0 text or attribute value: the five special characters escaped; what XML 1.0 cannot hold at all (control
+// characters, bytes that are not UTF-8: a joint name is whatever bytes its file has) written as '?'.
 std::string xmlEscaped(const std::string& s) {
     std::string out;
     out.reserve(s.size());
-    for (char c : s) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const char c = s[i];
+        if (static_cast<unsigned char>(c) >= 0x80) {
+            const std::size_t n = utf8Length(s, i);
+            out += n == 0 ? std::string("?") : s.substr(i, n);
+            i += n == 0 ? 0 : n - 1;
+            continue;
+        }
         switch (c) {
         case '&': out += "&amp;"; break;
         case '<': out += "&lt;"; break;
         case '>': out += "&gt;"; break;
         case '"': out += "&quot;"; break;
         case '\'': out += "&apos;"; break;
-        default:
-            if (static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t') out += '?';
-            else out += c;
+        default: out += static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t' ? '?' : c;
         }
     }
     return out;

@@ -187,7 +187,7 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                              cairo_line_to(cr, at.x() + 18, at.y() + 2);
                              cairo_stroke(cr);
                          },
-                         "limits: cone, pyramid, hinge arc (thick: body1's shaft)"});
+                         "limits: cone, pyramid, hinge arc (thick: body1's shaft; faint: seen end-on)"});
     if (show.mass) {
         double heaviest = 0;
         for (const figure::FigureBody& b : figure.bodies) heaviest = std::max(heaviest, b.massKg);

@@ -1,9 +1,10 @@
 # cmake -P test of `afb golden compare --junit` and `--report` (AFB, CHECK: afb_picture_check, XMLLINT: xmllint or
-# empty, SCHEMA: tests/cli/junit.xsd, SRC, TMP given). Four goldens of the bundled chain: one that holds, one whose
-# recorded pose has two joints moved 0.1 m, one whose tolerance is below zero (it fails with the pose as recorded:
-# its picture shows the two poses as one) and a file that is not a golden. The JUnit file validates against the
-# schema and counts them; the failure names the moved joints; the report has a summary and a picture per failing
-# golden, and the moved golden's picture differs from the one whose poses coincide.
+# empty, SCHEMA: tests/cli/junit.xsd, SRC, TMP given). Goldens of the bundled chain: one that holds, one whose
+# recorded pose has two joints moved half a metre, one whose tolerance is below zero (it fails with the pose as
+# recorded: its picture shows the two poses as one), a file that is not a golden, and one whose entity's name XML
+# must escape. The JUnit file validates against the schema and counts them; the failure names the moved joints; the
+# report has a summary and a picture per golden whose pose failed, and the moved golden's picture differs from the
+# one whose poses coincide.
 file(REMOVE_RECURSE "${TMP}")
 file(MAKE_DIRECTORY "${TMP}")
 file(COPY "${SRC}/af" "${SRC}/def" "${SRC}/models" DESTINATION "${TMP}")
@@ -20,10 +21,13 @@ file(WRITE "${TMP}/moved.json" "${moved}")
 string(JSON same SET "${golden}" tolerance position_m "-1")
 file(WRITE "${TMP}/same.json" "${same}")
 file(WRITE "${TMP}/broken.json" "{}")
+# An entity whose name XML must escape (and a control character XML 1.0 cannot hold): an error, still valid XML.
+string(JSON odd SET "${golden}" entity "\"ch<a>i&n'\\u0001\"")
+file(WRITE "${TMP}/odd.json" "${odd}")
 
 set(report "${TMP}/report")
 run_to(1 out "${AFB}" golden compare --junit "${TMP}/junit.xml" --report "${report}"
-       "${TMP}/pass.json" "${TMP}/moved.json" "${TMP}/same.json" "${TMP}/broken.json")
+       "${TMP}/pass.json" "${TMP}/moved.json" "${TMP}/same.json" "${TMP}/broken.json" "${TMP}/odd.json")
 if(NOT out MATCHES "ok   [^\n]*pass.json" OR NOT out MATCHES "FAIL [^\n]*moved.json")
   message(FATAL_ERROR "compare's lines are not as expected:\n${out}")
 endif()
@@ -37,24 +41,25 @@ elseif(DEFINED ENV{CI})
 else()
   message(STATUS "JUnit schema validation skipped: no xmllint")
 endif()
-foreach(re "<testsuites [^>]*tests=\"4\" failures=\"2\" errors=\"1\""
-           "<testsuite [^>]*tests=\"4\" failures=\"2\" errors=\"1\""
+foreach(re "<testsuites [^>]*tests=\"5\" failures=\"2\" errors=\"2\""
+           "<testsuite [^>]*tests=\"5\" failures=\"2\" errors=\"2\""
            "<testcase name=\"[^\"]*pass.json\" classname=\"afb.golden.chain\"[^>]*/>"
            "<testcase name=\"[^\"]*moved.json\"[^>]*>\n *<failure message=\"2 joints past tolerance [^\"]*: ${name_4}, ${name_6}\""
-           "<testcase name=\"[^\"]*broken.json\"[^>]*>\n *<error message=\"[^\"]*not a golden file")
+           "<testcase name=\"[^\"]*broken.json\"[^>]*>\n *<error message=\"[^\"]*not a golden file"
+           "classname=\"afb.golden.ch&lt;a&gt;i&amp;n&apos;\\?\"")
   if(NOT xml MATCHES "${re}")
     message(FATAL_ERROR "the JUnit report does not match '${re}':\n${xml}")
   endif()
 endforeach()
 string(REGEX MATCHALL "<testcase " cases "${xml}")
 list(LENGTH cases n)
-if(NOT n EQUAL 4)
-  message(FATAL_ERROR "${n} test cases, expected 4:\n${xml}")
+if(NOT n EQUAL 5)
+  message(FATAL_ERROR "${n} test cases, expected 5:\n${xml}")
 endif()
 
 # The Markdown summary and the pictures: one per failing golden that ran, none for the others.
 file(READ "${report}/summary.md" md)
-foreach(re "4 goldens: 1 passed, 2 failed, 1 could not be compared" "\\| [^|]*pass.json \\| chain \\| ok \\|" "\\*\\*FAIL\\*\\*"
+foreach(re "5 goldens: 1 passed, 2 failed, 2 could not be compared" "\\| [^|]*pass.json \\| chain \\| ok \\|" "\\*\\*FAIL\\*\\*"
            "\\*\\*ERROR\\*\\*" "!\\[[^]]*\\]\\(moved.png\\)" "${name_4} moved 0\\.[0-9]+ m")
   if(NOT md MATCHES "${re}")
     message(FATAL_ERROR "the summary does not match '${re}':\n${md}")
