@@ -341,7 +341,11 @@ void addCompareCommand(CLI::App* golden, int& exitCode) {
         if (!cmp->report.empty()) {
             std::error_code ec;
             std::filesystem::create_directories(cmp->report, ec);
-            if (ec) usageError("--report " + cmp->report.string() + ": " + ec.message());
+            if (ec) {
+                std::cerr << "afb golden compare: --report " << cmp->report.string() << ": " << ec.message() << "\n";
+                exitCode = kExitFailure;
+                return;
+            }
         }
         // With the JUnit report on stdout, the lines for people go to stderr.
         std::FILE* text = cmp->junit == "-" ? stderr : stdout;
@@ -363,7 +367,13 @@ void addCompareCommand(CLI::App* golden, int& exitCode) {
         if (error) {
             std::cerr << "afb golden compare: " << *error << "\n";
             exitCode = kExitFailure;
+            return;
         }
+        if (!cmp->junit.empty() && cmp->junit != "-")
+            std::fprintf(text, "afb golden compare: JUnit report -> %s\n", cmp->junit.c_str());
+        if (!cmp->report.empty())
+            std::fprintf(text, "afb golden compare: report -> %s (%zu pictures)\n",
+                         (cmp->report / "summary.md").c_str(), pictures.size());
     });
 }
 

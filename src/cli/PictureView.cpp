@@ -116,9 +116,10 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
     if (n > 0) drawRootMark(cr, panel.toPx(request.joints[0].position));
 }
 
-// A cone of half angle `halfAngle` about `axis` from `apex`: its rim and, unless `rimOnly`, four generators.
+// A cone of half angle `halfAngle` about `axis` from `apex`: its rim, then four generators in `generators` (their
+// colour and opacity).
 void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Vector3d& axis, double halfAngle,
-              double length, bool rimOnly) {
+              double length, const std::pair<Rgb, double>& generators) {
     const auto [u, v] = perpendicular(axis);
     std::vector<Vector2d> rim;
     constexpr int kSides = 48;
@@ -129,19 +130,19 @@ void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, cons
     }
     polyline(cr, rim, true);
     cairo_stroke(cr);
-    if (rimOnly) return;
+    setColour(cr, generators.first, generators.second);
     for (int k = 0; k < kSides; k += kSides / 4) line(cr, panel.toPx(apex), rim[static_cast<std::size_t>(k)]);
     cairo_stroke(cr);
 }
 
 // How much of a limit glyph about `axis` a view shows, in [0, 1]: 1 when the axis lies in the page, 0 when it
 // points at the viewer. A cone seen end-on is a circle round its joint that says little about the limit and hides
-// its neighbours (the shoulders in a side view, the hips and spine from above): it is drawn faint, rim only.
+// its neighbours (the shoulders in a side view, the hips and spine from above): it is drawn faint, its generators
+// fading out (smoothly: a threshold would flip between two poses equal but for rounding).
 double inPage(const PanelMapping& panel, const Vector3d& axis) {
     const double along = axis.normalized().dot(panel.axes.toViewer);
     return std::sqrt(std::max(0.0, 1.0 - along * along));
 }
-constexpr double kEndOn = 0.5; // inPage below this: an end-on glyph
 
 // A pyramid: the four edges where both projected angles are at their limits, and the rim joining them.
 void drawPyramid(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Eigen::Matrix3d& basis,
@@ -197,7 +198,8 @@ void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
             const Vector3d axis = body2.rotation * cone->axisInBody2;
             shown = inPage(panel, axis);
             setColour(cr, colour, 0.15 + 0.65 * shown);
-            drawCone(cr, panel, frame2.position, axis, cone->halfAngleRad, glyphM, shown < kEndOn);
+            drawCone(cr, panel, frame2.position, axis, cone->halfAngleRad, glyphM,
+                     {colour, (0.15 + 0.65 * shown) * shown * shown}); // generators fade out end-on
             shaft = body1.rotation * cone->shaftInBody1;
         } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
             shown = inPage(panel, body2.rotation * p->basisInBody2.col(0));

@@ -82,3 +82,9 @@ execute_process(COMMAND "${AFB}" golden compare --junit - "${TMP}/pass.json"
 if(NOT rc EQUAL 0 OR NOT stdout MATCHES "^<\\?xml " OR stdout MATCHES "ok   " OR NOT stderr MATCHES "ok   ")
   message(FATAL_ERROR "--junit -: exit ${rc}\nstdout:\n${stdout}\nstderr:\n${stderr}")
 endif()
+
+# A report folder that cannot be made (a file is in the way) is bad input: exit 1, saying so.
+run_to(1 out "${AFB}" golden compare --report "${TMP}/pass.json/report" "${TMP}/pass.json")
+if(NOT out MATCHES "--report [^\n]*pass.json/report: ")
+  message(FATAL_ERROR "an impossible report folder was not reported:\n${out}")
+endif()
