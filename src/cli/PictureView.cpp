@@ -68,13 +68,20 @@ void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
             }
             if (loop.size() < 3 || normal.norm() == 0) continue;
             const double facing = normal.normalized().dot(panel.axes.toViewer);
-            if (facing <= 1e-9) continue;
+            // A face seen edge-on shows nothing but its outline, which its neighbours draw; culling it by a margin
+            // wider than rounding keeps a pose that differs only by rounding (float spawn transforms) the same
+            // picture, where a face at ±1e-8 would be drawn as a one-pixel line or not.
+            if (facing <= 1e-4) continue;
             Face f{panel.depth(centroid / static_cast<double>(loop.size())), i, facing, {}};
             for (int v : loop) f.px.push_back(panel.toPx(world[static_cast<std::size_t>(v)]));
             faces.push_back(std::move(f));
         }
     }
-    std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.depth < b.depth; });
+    // Depths within a hundredth of a millimetre are a tie, kept in body order: faces of touching bodies at one
+    // depth would otherwise swap with rounding and redraw their shared edge in the other body's outline.
+    const auto level = [](double depth) { return std::llround(depth * 1e5); };
+    std::stable_sort(faces.begin(), faces.end(),
+                     [&](const Face& a, const Face& b) { return level(a.depth) < level(b.depth); });
     cairo_set_line_width(cr, 1.0);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const Face& f : faces) {
