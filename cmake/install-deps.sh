@@ -18,6 +18,7 @@ packages=(
   gnuplot-nox
   libcairo2-dev fonts-dejavu-core        # afb draw: 2D drawing, PNG and SVG output, a font for its labels
   libexpat1-dev                          # tests: the SVG pictures parse as XML
+  libxml2-utils                          # tests: xmllint validates afb golden compare's JUnit XML
   doxygen                                # the API reference (docs preset)
   parallel                               # afb plan/run/merge: the GNU parallel recipe (tests/cli/batch.sh)
   slurm-wlm munge                        # afb plan/run/merge: the Slurm recipe on a single-node Slurm (tests/cli/slurm.sh)

@@ -39,6 +39,8 @@ run resolve "$afb" resolve --json --base . humanoid
 run inspect "$afb" inspect --json --base . buggy
 run draw-png "$afb" draw --base . humanoid --out "$work/humanoid.png"
 run draw-svg "$afb" draw --base . lamp --out "$work/lamp.svg"
+run draw-names "$afb" draw --base . buggy --show bodies,joints,limits,names --out "$work/buggy-names.png"
+run golden-reports "$afb" golden compare --junit "$work/goldens.xml" --report "$work/golden-report" tests/golden/*.json
 run gen "$afb" gen models/md5/humanoid/humanoid.md5mesh --out "$work/gen" --json
 run methods "$afb" methods
 run methods-json "$afb" methods raw --json

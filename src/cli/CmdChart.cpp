@@ -130,7 +130,11 @@ int chartCommand(ChartCli& opt) {
 } // namespace
 
 void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
-    auto* cmd = app.add_subcommand("chart", "Chart speed against accuracy: methods x figures x heights x rates");
+    auto* cmd =
+        app.add_subcommand("chart", "Chart speed against accuracy: methods x figures x heights x rates\n"
+                                    "Examples:\n  afb chart --base . chain --methods raw,fast,default --out chart\n"
+                                    "  afb chart --base . humanoid --methods fast,default:substeps=2 --heights "
+                                    "1,10 --out chart");
     cmd->footer("Writes into --out: runs.csv (one row per run: method_label, height_m, hz, repeat and every afb drop "
                 "field and knob), front.png and front.svg (gnuplot: cost against each error, log-log, Pareto fronts "
                 "dashed), front.gp and front.dat (their script and data), summary.md (per figure: every method, the "

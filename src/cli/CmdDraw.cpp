@@ -22,13 +22,14 @@ std::vector<View> parseViews(const std::vector<std::string>& names) {
 }
 
 PictureLayers parseLayers(const std::vector<std::string>& names) {
-    PictureLayers show{false, false, false, false, false};
+    PictureLayers show{false, false, false, false, false, false};
     for (const std::string& n : names) {
         if (n == "bodies") show.bodies = true;
         if (n == "joints") show.joints = true;
         if (n == "limits") show.limits = true;
         if (n == "mass") show.mass = true;
         if (n == "skeleton") show.skeleton = true;
+        if (n == "names") show.names = true;
     }
     return show;
 }
@@ -63,7 +64,7 @@ void addDrawOptions(CLI::App* cmd, DrawCli& opt) {
         ->capture_default_str();
     cmd->add_option("--show", opt.show, "Layers to draw")
         ->delimiter(',')
-        ->check(CLI::IsMember({"bodies", "joints", "limits", "mass", "skeleton"}))
+        ->check(CLI::IsMember({"bodies", "joints", "limits", "mass", "skeleton", "names"}))
         ->capture_default_str();
     cmd->add_option("--at", opt.atSeconds, "Draw the pose of a drop at this time, s (default: the load pose)")
         ->check(nonNegative());
@@ -136,7 +137,10 @@ int drawCommand(const DrawCli& opt) {
 
 void addDrawCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand("draw", "A picture of a figure (PNG or SVG): bodies, md5 skeleton, constraint "
-                                           "anchors, limits and masses, in its load pose or during a drop");
+                                           "anchors, limits and masses, in its load pose or during a drop\n"
+                                           "Examples:\n  afb draw --base . humanoid --out humanoid.png\n"
+                                           "  afb draw --base . humanoid --out names.svg --view side --show "
+                                           "bodies,skeleton,names");
     cmd->footer("Views are orthographic, at one scale, side by side: front (from +X, the way Doom models face), side "
                 "(from -Y) and top (from +Z). With --at, the figure is drawn in the pose of `afb drop` at that time "
                 "(the first instance, relative to its spawn: --at 0 is the load pose) and the ground is shown when "

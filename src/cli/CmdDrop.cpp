@@ -107,7 +107,9 @@ void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, con
                      r.nonFinite  ? "NaN"
                      : r.exploded ? "YES"
                                   : "no",
-                     r.settleTimeS ? std::to_string(*r.settleTimeS).substr(0, 6).c_str() : "-");
+                     r.settleTimeS
+                         ? (std::to_string(*r.settleTimeS).substr(0, 6) + (r.frozenBeforeContact ? "*" : "")).c_str()
+                         : "-");
     }
     for (std::size_t i = 0; i < results.size(); ++i)
         if (const sim::DropResult& r = results[i]; !r.worstAnchorJoint.empty() || !r.worstLimitJoint.empty())
@@ -119,6 +121,12 @@ void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, con
                       "body-steps awake;\n   anchor m, limit deg, pen. m: worst joint gap, limit overshoot, contact "
                       "depth; rest m: deepest contact\n   in the last second; gain J: largest energy gain; settle s: "
                       "all instances at rest; every field: --help)\n");
+    for (std::size_t i = 0; i < results.size(); ++i)
+        if (const sim::DropResult& r = results[i]; r.frozenBeforeContact > 0)
+            std::fprintf(out,
+                         "  %s: * %d of %d instances came to rest before touching anything: frozen in the air by "
+                         "the figure's rest rules (its maxMoveTime), not settled\n",
+                         labels[i].c_str(), r.frozenBeforeContact, count);
     for (std::size_t i = 0; i < results.size(); ++i)
         if (const sim::DropResult& r = results[i]; r.lodBodies)
             std::fprintf(out, "  %s: level of detail, %d rigid bodies for %d bodies per instance\n", labels[i].c_str(),

@@ -9,7 +9,9 @@ namespace afb::cli {
 
 void addFmtCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand("fmt", "Print an .af file in canonical form (blocks in file order, keys in a "
-                                          "fixed order, shortest exact numbers)");
+                                          "fixed order, shortest exact numbers)\n"
+                                          "Examples:\n  afb fmt af/chain.af > chain.af\n"
+                                          "  afb fmt --check af/humanoid.af");
     struct Options {
         std::filesystem::path file;
         bool check = false;

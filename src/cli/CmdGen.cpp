@@ -173,7 +173,9 @@ int runIsolated(const GenCliOptions& opt) {
 void addGenCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand(
         "gen", "Generate a ragdoll figure from a rigged mesh (.md5mesh, or any format assimp reads: FBX, glTF/GLB, "
-               "Collada, X, B3D, ...): writes DIR/af/N.af, DIR/def/N.def and DIR/models/md5/N/ (mesh and af_pose)");
+               "Collada, X, B3D, ...): writes DIR/af/N.af, DIR/def/N.def and DIR/models/md5/N/ (mesh and af_pose)\n"
+               "Examples:\n  afb gen models/md5/humanoid/humanoid.md5mesh --out generated\n"
+               "  afb gen character.fbx --out generated --name hero --height 1.8");
     auto opt = std::make_shared<GenCliOptions>();
     cmd->add_option("model", opt->model, "The rigged mesh")->required();
     cmd->add_option("--out", opt->out, "Content folder to write into (created when missing)")->required();

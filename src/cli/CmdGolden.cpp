@@ -1,11 +1,15 @@
 // afb golden record|compare: settled poses of drop scenarios, stored as JSON and compared within tolerances.
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "Commands.h"
+#include "GoldenReport.h"
 #include "MethodOptions.h"
 #include "Usage.h"
 #include "afb/figure/Load.h"
@@ -58,6 +62,7 @@ std::string stateHash(const sim::DropResult& r) {
 
 struct Run {
     std::optional<decl::ResolvedEntity> resolved;
+    std::optional<figure::Figure> figure;
     std::optional<sim::DropResult> result;
 };
 
@@ -72,6 +77,7 @@ Run runScenario(const std::filesystem::path& base, const std::string& entity, co
         sim::DropOptions drop = o;
         drop.startAtRest = loaded->startAtRest;
         run.result = sim::runDrop(loaded->figure, drop);
+        run.figure = std::move(loaded->figure);
     }
     return run;
 }
@@ -110,7 +116,10 @@ nlohmann::json goldenJson(const Record& rec, const Run& run) {
 
 void addRecordCommand(CLI::App* golden, int& exitCode) {
     auto rec = std::make_shared<Record>();
-    auto* record = golden->add_subcommand("record", "Run a drop and store its scenario, input hashes and settled pose");
+    auto* record = golden->add_subcommand("record", "Run a drop and store its scenario, input hashes and settled pose\n"
+                                                    "Examples:\n  afb golden record --base . chain --out chain.json\n"
+                                                    "  afb golden record --base . humanoid --out humanoid.json "
+                                                    "--height 2 --seconds 5");
     record->add_option("entity", rec->entity, "entityDef to drop")->required();
     record->add_option("--base", rec->base, "Content folder")->capture_default_str();
     record->add_option("--out", rec->out, "Golden file to write (JSON)")->required();
@@ -148,6 +157,7 @@ struct Compare {
     std::vector<std::filesystem::path> files;
     bool exact = false;
     bool ignoreInputs = false;
+    std::filesystem::path junit, report;
 };
 
 // A golden file's scenario, checked: the record, its content folder and drop options.
@@ -157,31 +167,34 @@ struct Golden {
     sim::DropOptions options;
 };
 
-// Reads a golden file; nullopt (after saying why) when it is not one, an input changed (unless `ignoreInputs`) or
-// its method cannot be run as recorded.
-std::optional<Golden> readGolden(const std::filesystem::path& file, bool ignoreInputs) {
+// Reads a golden file; nullopt when it is not one, an input changed (unless `ignoreInputs`) or its method cannot
+// be run as recorded: the case's errors say why. A changed input compared anyway is a line on stderr.
+std::optional<Golden> readGolden(const std::filesystem::path& file, bool ignoreInputs, GoldenCase& out) {
     text::Diagnostics diags;
     const auto data = text::readFile(file, diags);
     Golden golden;
     if (data) golden.g = nlohmann::json::parse(*data, nullptr, false);
     const nlohmann::json& g = golden.g;
     if (!data || g.is_discarded() || !g.contains("pose")) {
-        printDiagnostics(diags);
-        std::cerr << file.string() << ": error: not a golden file\n";
+        for (const text::Diagnostic& d : diags.items()) out.errors.push_back(d.str());
+        out.errors.push_back(file.string() + ": error: not a golden file");
         return std::nullopt;
     }
+    out.entity = g.at("entity").get<std::string>();
     golden.base = std::filesystem::absolute(file).parent_path() / g.at("base").get<std::string>();
     // An input that changed is reported as such, not as a pose difference.
-    bool changed = false;
+    std::vector<std::string> changed;
     const nlohmann::json inputs = g.value("inputs", nlohmann::json::object());
     for (const auto& [rel, hash] : inputs.items())
-        if (fileHash(golden.base / rel) != hash.get<std::string>()) {
-            std::cerr << file.string() << ": input changed since recording: " << rel << "\n";
-            changed = true;
-        }
-    if (changed && !ignoreInputs) return std::nullopt;
+        if (fileHash(golden.base / rel) != hash.get<std::string>())
+            changed.push_back(file.string() + ": input changed since recording: " + rel);
+    if (!changed.empty() && !ignoreInputs) {
+        out.errors = changed;
+        return std::nullopt;
+    }
+    for (const std::string& c : changed) std::cerr << c << "\n";
     if (const std::string err = sim::dropOptionsFromJson(g.at("options"), golden.options); !err.empty()) {
-        std::cerr << file.string() << ": error: " << err << "\n";
+        out.errors.push_back(file.string() + ": error: " + err);
         return std::nullopt;
     }
     // A knob the record does not name would run with today's preset value: a method nobody recorded, whose pose
@@ -190,20 +203,43 @@ std::optional<Golden> readGolden(const std::filesystem::path& file, bool ignoreI
         !missing.empty() && g.at("options").contains("method")) {
         std::string names;
         for (const std::string& k : missing) names += (names.empty() ? "" : ", ") + k;
-        std::cerr << file.string() << ": error: the recorded method does not name " << names
-                  << " (recorded before the knob existed); re-record it with afb golden record\n";
+        out.errors.push_back(file.string() + ": error: the recorded method does not name " + names +
+                             " (recorded before the knob existed); re-record it with afb golden record");
         return std::nullopt;
     }
     return golden;
 }
 
-// Prints the comparison of a run with its golden record; true when every joint is within its tolerance (and, with
-// `exact`, the state hash is equal).
-bool comparePose(const std::filesystem::path& file, const nlohmann::json& g, const sim::DropResult& result,
-                 bool exact) {
-    const double tolM = g.at("tolerance").at("position_m"), tolDeg = g.at("tolerance").at("angle_deg");
-    std::vector<std::string> moved;
-    double worstM = 0, worstDeg = 0;
+// The recorded pose: the entity transform (world; identity in records made before it was kept) and every joint.
+PoseRecord recordedPose(const nlohmann::json& g) {
+    const auto transform = [](const nlohmann::json& j) {
+        const std::vector<double> p = j.at("position"), q = j.at("quaternion");
+        if (p.size() != 3 || q.size() != 4) throw std::invalid_argument("a position or quaternion of a wrong size");
+        return figure::Transform{Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix(),
+                                 Eigen::Vector3d(p[0], p[1], p[2])};
+    };
+    PoseRecord pose;
+    if (g.contains("entity_transform")) pose.entity = transform(g.at("entity_transform"));
+    for (const auto& j : g.at("pose")) pose.jointsModel.push_back(transform(j));
+    return pose;
+}
+
+PoseRecord settledPose(const sim::DropResult& r) {
+    const auto transform = [](const double* p, const double* q) {
+        return figure::Transform{Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix(),
+                                 Eigen::Vector3d(p[0], p[1], p[2])};
+    };
+    PoseRecord pose;
+    pose.entity = transform(r.entity, r.entity + 3);
+    for (const sim::JointPose& j : r.finalPose) pose.jointsModel.push_back(transform(j.position, j.quaternion));
+    return pose;
+}
+
+// Compares a run with its golden record: every joint within its tolerance (and, with `exact`, the state hash
+// equal) passes.
+void comparePose(const nlohmann::json& g, const sim::DropResult& result, bool exact, GoldenCase& out) {
+    out.toleranceM = g.at("tolerance").at("position_m");
+    out.toleranceDeg = g.at("tolerance").at("angle_deg");
     const auto& joints = g.at("pose");
     // The entity transform (world) first, then every joint (model space).
     std::vector<sim::JointPose> nowPose;
@@ -220,59 +256,133 @@ bool comparePose(const std::filesystem::path& file, const nlohmann::json& g, con
         const std::vector<double> p = expected[i]["position"], q = expected[i]["quaternion"];
         const double dm = std::hypot(now.position[0] - p[0], now.position[1] - p[1], now.position[2] - p[2]);
         const double dd = angleDeg(now.quaternion, q.data());
-        worstM = std::max(worstM, dm);
-        worstDeg = std::max(worstDeg, dd);
-        if (dm > tolM || dd > tolDeg) {
-            char line[160];
-            std::snprintf(line, sizeof line, "  %-20s moved %.4f m, turned %.2f deg", now.name.c_str(), dm, dd);
-            moved.emplace_back(line);
-        }
+        out.worstM = std::max(out.worstM, dm);
+        out.worstDeg = std::max(out.worstDeg, dd);
+        if (dm > out.toleranceM || dd > out.toleranceDeg) out.missed.push_back({now.name, dm, dd});
     }
-    bool fail = !moved.empty() || joints.size() + 1 != nowPose.size();
-    const std::string hash = stateHash(result);
-    const bool hashEqual = exact && hash == g.at("state_hash").get<std::string>();
-    if (exact && !hashEqual) fail = true;
-    std::printf("%s %s: worst joint %.4f m / %.2f deg (tolerance %.4f m / %.2f deg)%s%s\n", fail ? "FAIL" : "ok  ",
-                file.string().c_str(), worstM, worstDeg, tolM, tolDeg,
-                exact ? (hashEqual ? ", state hash equal" : ", state hash differs") : "",
-                joints.size() + 1 != nowPose.size() ? ", joint count differs" : "");
-    for (const std::string& m : moved) std::printf("%s\n", m.c_str());
-    return !fail;
+    if (exact)
+        out.notes.push_back(stateHash(result) == g.at("state_hash").get<std::string>() ? "state hash equal"
+                                                                                       : "state hash differs");
+    if (joints.size() + 1 != nowPose.size()) out.notes.push_back("joint count differs");
+    out.passed = out.missed.empty() && joints.size() + 1 == nowPose.size() &&
+                 (!exact || out.notes.front() == "state hash equal");
 }
 
-// Re-runs one golden file; true when it holds.
-bool compareOne(const std::filesystem::path& file, const Compare& cmp) {
+// A file name in the report folder for the picture of `c`, unique among `taken`.
+std::filesystem::path pictureName(const GoldenCase& c, std::vector<std::filesystem::path>& taken) {
+    const std::string stem = c.file.stem().string().empty() ? "golden" : c.file.stem().string();
+    std::filesystem::path name = stem + ".png";
+    for (int k = 2; std::find(taken.begin(), taken.end(), name) != taken.end(); ++k)
+        name = stem + "-" + std::to_string(k) + ".png";
+    taken.push_back(name);
+    return name;
+}
+
+// Draws a failing golden's settled pose over its recorded one into the report folder.
+void drawFailure(const Compare& cmp, const Golden& golden, const Run& run, GoldenCase& c,
+                 std::vector<std::filesystem::path>& taken) {
+    const PoseRecord recorded = recordedPose(golden.g);
+    if (recorded.jointsModel.size() != static_cast<std::size_t>(run.figure->skeleton.jointCount()))
+        return; // a record of another skeleton: nothing to overlay
+    const std::filesystem::path name = pictureName(c, taken);
+    char subtitle[160];
+    std::snprintf(subtitle, sizeof subtitle, "%zu joints past tolerance; worst %.4f m / %.2f deg", c.missed.size(),
+                  c.worstM, c.worstDeg);
+    if (const auto error = drawGoldenPicture(*run.figure, recorded, settledPose(*run.result), c.file.generic_string(),
+                                             subtitle, cmp.report / name))
+        std::cerr << "afb golden compare: --report: " << *error << "\n";
+    else c.picture = name;
+}
+
+// Re-runs one golden file.
+GoldenCase compareOne(const std::filesystem::path& file, const Compare& cmp,
+                      std::vector<std::filesystem::path>& pictures) {
+    GoldenCase c;
+    c.file = file;
+    const auto t0 = std::chrono::steady_clock::now();
     try {
-        const auto golden = readGolden(file, cmp.ignoreInputs);
-        if (!golden) return false;
+        const auto golden = readGolden(file, cmp.ignoreInputs, c);
+        if (!golden) return c;
         text::Diagnostics diags;
-        const Run run = runScenario(golden->base, golden->g.at("entity").get<std::string>(), golden->options, diags);
-        printDiagnostics(diags);
-        return run.result && comparePose(file, golden->g, *run.result, cmp.exact);
-    } catch (const nlohmann::json::exception& e) {
-        std::cerr << file.string() << ": error: malformed golden file: " << e.what() << "\n";
-        return false;
+        const Run run = runScenario(golden->base, c.entity, golden->options, diags);
+        c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (!run.result) {
+            for (const text::Diagnostic& d : diags.items()) c.errors.push_back(d.str());
+            if (c.errors.empty()) c.errors.push_back(file.string() + ": error: the scenario did not run");
+            return c;
+        }
+        printDiagnostics(diags); // warnings
+        comparePose(golden->g, *run.result, cmp.exact, c);
+        if (!c.passed && !c.missed.empty() && !cmp.report.empty()) drawFailure(cmp, *golden, run, c, pictures);
+    } catch (const std::exception& e) {
+        c.passed = false;
+        c.errors.push_back(file.string() + ": error: malformed golden file: " + e.what());
     }
+    return c;
 }
 
 void addCompareCommand(CLI::App* golden, int& exitCode) {
     auto cmp = std::make_shared<Compare>();
     auto* compare = golden->add_subcommand("compare", "Re-run golden scenarios; exit 1 when a joint moved past its "
-                                                      "tolerance or an input changed");
+                                                      "tolerance or an input changed\n"
+                                                      "Examples:\n  afb golden compare tests/golden/*.json\n"
+                                                      "  afb golden compare --junit goldens.xml --report golden-report "
+                                                      "tests/golden/*.json");
     compare->add_option("files", cmp->files, "Golden files")->required();
     compare->add_flag("--exact", cmp->exact, "Also demand the bit-exact state hash (same build, same machine class)");
     compare->add_flag("--ignore-inputs", cmp->ignoreInputs,
                       "Compare poses even when input files changed since recording (they are still listed)");
+    compare->add_option("--junit", cmp->junit,
+                        "Write a JUnit XML report (one test case per golden; '-': stdout, which then holds only it)");
+    compare->add_option("--report", cmp->report,
+                        "Write DIR/summary.md and, per failing golden, DIR/NAME.png: the settled pose (orange) over "
+                        "the golden pose (blue)");
     compare->callback([cmp, &exitCode] {
-        for (const std::filesystem::path& file : cmp->files)
-            if (!compareOne(file, *cmp)) exitCode = kExitFailure;
+        if (!cmp->report.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(cmp->report, ec);
+            if (ec) {
+                std::cerr << "afb golden compare: --report " << cmp->report.string() << ": " << ec.message() << "\n";
+                exitCode = kExitFailure;
+                return;
+            }
+        }
+        // With the JUnit report on stdout, the lines for people go to stderr.
+        std::FILE* text = cmp->junit == "-" ? stderr : stdout;
+        std::vector<GoldenCase> cases;
+        std::vector<std::filesystem::path> pictures;
+        for (const std::filesystem::path& file : cmp->files) {
+            cases.push_back(compareOne(file, *cmp, pictures));
+            const GoldenCase& c = cases.back();
+            for (const std::string& e : c.errors) std::fprintf(stderr, "%s\n", e.c_str());
+            if (c.errors.empty()) std::fprintf(text, "%s\n", caseLine(c).c_str());
+            for (const JointMiss& m : c.missed)
+                std::fprintf(text, "  %-20s moved %.4f m, turned %.2f deg\n", m.joint.c_str(), m.movedM, m.turnedDeg);
+            std::fflush(text);
+            if (!c.passed) exitCode = kExitFailure;
+        }
+        std::optional<std::string> error;
+        if (!cmp->junit.empty()) error = writeJUnit(cases, cmp->junit);
+        if (!error && !cmp->report.empty()) error = writeMarkdown(cases, cmp->report);
+        if (error) {
+            std::cerr << "afb golden compare: " << *error << "\n";
+            exitCode = kExitFailure;
+            return;
+        }
+        if (!cmp->junit.empty() && cmp->junit != "-")
+            std::fprintf(text, "afb golden compare: JUnit report -> %s\n", cmp->junit.c_str());
+        if (!cmp->report.empty())
+            std::fprintf(text, "afb golden compare: report -> %s (%zu pictures)\n",
+                         (cmp->report / "summary.md").c_str(), pictures.size());
     });
 }
 
 } // namespace
 
 void addGoldenCommand(CLI::App& app, int& exitCode) {
-    auto* golden = app.add_subcommand("golden", "Record and compare settled poses of drop scenarios");
+    auto* golden = app.add_subcommand("golden", "Record and compare settled poses of drop scenarios\n"
+                                                "Examples:\n  afb golden record --base . chain --out chain.json\n"
+                                                "  afb golden compare --junit goldens.xml chain.json");
     golden->require_subcommand(1);
     addRecordCommand(golden, exitCode);
     addCompareCommand(golden, exitCode);

@@ -104,7 +104,11 @@ void printFigure(const figure::Figure& f) {
 } // namespace
 
 void addInspectCommand(CLI::App& app, int& exitCode) {
-    auto* cmd = app.add_subcommand("inspect", "Build a figure and print its bodies, constraints, totals and findings");
+    auto* cmd =
+        app.add_subcommand("inspect", "Build a figure and print its bodies, constraints, totals and findings\n"
+                                      "Examples:\n  afb inspect --base . humanoid\n"
+                                      "  afb inspect --af af/chain.af --mesh models/md5/props/chain/chain.md5mesh "
+                                      "--pose models/md5/props/chain/af_pose.md5anim");
     struct Options {
         std::filesystem::path base = ".";
         std::string entity;

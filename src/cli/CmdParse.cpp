@@ -70,7 +70,9 @@ nlohmann::json parseOne(const std::filesystem::path& path, text::Diagnostics& di
 
 void addParseCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand("parse", "Parse .af, .def, .md5mesh and .md5anim files (by extension); exit 0 "
-                                            "iff every file parses");
+                                            "iff every file parses\n"
+                                            "Examples:\n  afb parse af/chain.af models/md5/props/chain/chain.md5mesh\n"
+                                            "  afb parse --json def/*.def");
     struct Options {
         std::vector<std::filesystem::path> files;
         bool json = false;

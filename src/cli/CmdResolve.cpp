@@ -8,7 +8,9 @@ namespace afb::cli {
 
 void addResolveCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand("resolve", "Follow an entityDef through inherit to its model decl, mesh, "
-                                              "af_pose anim and articulated figure");
+                                              "af_pose anim and articulated figure\n"
+                                              "Examples:\n  afb resolve --base . humanoid\n"
+                                              "  afb resolve --base . --json chain");
     struct Options {
         std::filesystem::path base = ".";
         std::string entity;

@@ -206,7 +206,9 @@ int stressCommand(const StressCli& opt) {
 } // namespace
 
 void addStressCommand(CLI::App& app, int& exitCode, char** argv) {
-    auto* cmd = app.add_subcommand("stress", "Where methods fail: stress scenarios x methods, first failure per cell");
+    auto* cmd = app.add_subcommand("stress", "Where methods fail: stress scenarios x methods, first failure per cell\n"
+                                             "Examples:\n  afb stress --list\n"
+                                             "  afb stress --base . --ci --methods fast,default --out stress");
     cmd->footer("Writes into --out: stress.md (thresholds, the matrix, every failure and the worst values), "
                 "stress.json (the same, with every knob), stress.png (gnuplot heat map; stress.gp and stress.dat "
                 "redraw it). Exit code 0 even when cells fail (2 on bad arguments).\n"

@@ -113,7 +113,19 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                                     const PanelStyle& style, bool groundShown) {
     std::vector<LegendItem> items;
     const PictureLayers& show = request.show;
-    if (show.bodies)
+    if (request.reference) {
+        for (const auto& pose : {std::pair{referencePoseColour(), request.reference->label},
+                                 std::pair{ownPoseColour(), request.reference->ownLabel}})
+            items.push_back({[colour = pose.first](cairo_t* cr, Vector2d at) {
+                                 cairo_rectangle(cr, at.x() + 1, at.y() - 6, 24, 12);
+                                 cairo_set_source_rgba(cr, colour.r, colour.g, colour.b, 0.6);
+                                 cairo_fill_preserve(cr);
+                                 cairo_set_source_rgb(cr, colour.r * 0.5, colour.g * 0.5, colour.b * 0.5);
+                                 cairo_set_line_width(cr, 1);
+                                 cairo_stroke(cr);
+                             },
+                             pose.second});
+    } else if (show.bodies)
         items.push_back({[](cairo_t* cr, Vector2d at) {
                              for (int k = 0; k < 3; ++k) {
                                  const Rgb c = bodyColour(static_cast<std::size_t>(k));
@@ -175,7 +187,7 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                              cairo_line_to(cr, at.x() + 18, at.y() + 2);
                              cairo_stroke(cr);
                          },
-                         "limits: cone, pyramid, hinge arc (thick: body1's shaft)"});
+                         "limits: cone, pyramid, hinge arc (thick: body1's shaft; faint: seen end-on)"});
     if (show.mass) {
         double heaviest = 0;
         for (const figure::FigureBody& b : figure.bodies) heaviest = std::max(heaviest, b.massKg);
@@ -351,7 +363,8 @@ std::optional<std::string> drawPicture(const figure::Figure& figure, const Pictu
     if (request.bodies.size() != figure.bodies.size()) return std::string("one body transform per body expected");
 
     PanelStyle style;
-    style.glyphM = std::clamp(0.065 * loadPoseDiagonal(figure), 0.02, 0.3);
+    // Limit glyphs short enough that the glyphs of neighbouring joints (shoulders, hips) seldom cross.
+    style.glyphM = std::clamp(0.045 * loadPoseDiagonal(figure), 0.02, 0.2);
     double heaviest = 0;
     for (const figure::FigureBody& b : figure.bodies) heaviest = std::max(heaviest, b.massKg);
     style.massPxPerSqrtKg = heaviest > 0 ? kMaxMassRadius / std::sqrt(heaviest) : 0;

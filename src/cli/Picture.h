@@ -25,6 +25,16 @@ struct PictureLayers {
     bool limits = true;   ///< cone and pyramid outlines, hinge arcs, at the anchors
     bool mass = true;     ///< centre-of-mass discs with area proportional to mass; labels in the first view
     bool skeleton = true; ///< md5 joints as dots, lines to their parents
+    bool names = false;   ///< body names at their centres of mass, constraint names at their anchors
+};
+
+/// A second pose of the same figure, drawn beneath the request's own (a golden report: the recorded pose beneath
+/// the settled one). With one, each pose is drawn in a colour of its own, named in the legend.
+struct PictureReference {
+    std::vector<figure::Transform> bodies; ///< one per figure body, in the frame of PictureRequest::bodies
+    std::vector<figure::Transform> joints; ///< one per md5 joint, same frame
+    std::string label;                     ///< the legend's name of this pose, e.g. "golden pose (recorded)"
+    std::string ownLabel;                  ///< the legend's name of the request's own pose, e.g. "settled pose"
 };
 
 /// A figure in one pose, and how to picture it.
@@ -41,6 +51,8 @@ struct PictureRequest {
     /// Height of a ground plane (normal +Z) in the same frame, metres; drawn in the front and side views when
     /// it falls inside the panel.
     std::optional<double> groundZ;
+    /// A pose drawn beneath this one, each in one colour; none: bodies in their own colours.
+    std::optional<PictureReference> reference;
 };
 
 /// Draws `request` of `figure` into `out`, PNG or SVG by its extension (".png", ".svg"). Returns an error

@@ -49,8 +49,9 @@ struct Face {
 
 // Painter's order: the faces turned toward the viewer, farthest first. The polytopes are convex, so culling
 // the back faces leaves only the order between bodies to get right, which centroid depth does for touching
-// limbs.
-void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel) {
+// limbs. With a `tint`, every body is filled in that one colour at `alpha` (a pose of a two-pose picture).
+void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+                const std::optional<Rgb>& tint = std::nullopt, double alpha = 1.0) {
     std::vector<Face> faces;
     for (std::size_t i = 0; i < figure.bodies.size(); ++i) {
         const figure::BodyShape& shape = figure.bodies[i].shape;
@@ -67,29 +68,37 @@ void drawBodies(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
             }
             if (loop.size() < 3 || normal.norm() == 0) continue;
             const double facing = normal.normalized().dot(panel.axes.toViewer);
-            if (facing <= 1e-9) continue;
+            // A face seen edge-on shows nothing but its outline, which its neighbours draw; culling it by a margin
+            // wider than rounding keeps a pose that differs only by rounding (float spawn transforms) the same
+            // picture, where a face at ±1e-8 would be drawn as a one-pixel line or not.
+            if (facing <= 1e-4) continue;
             Face f{panel.depth(centroid / static_cast<double>(loop.size())), i, facing, {}};
             for (int v : loop) f.px.push_back(panel.toPx(world[static_cast<std::size_t>(v)]));
             faces.push_back(std::move(f));
         }
     }
-    std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.depth < b.depth; });
+    // Depths within a hundredth of a millimetre are a tie, kept in body order: faces of touching bodies at one
+    // depth would otherwise swap with rounding and redraw their shared edge in the other body's outline.
+    const auto level = [](double depth) { return std::llround(depth * 1e5); };
+    std::stable_sort(faces.begin(), faces.end(),
+                     [&](const Face& a, const Face& b) { return level(a.depth) < level(b.depth); });
     cairo_set_line_width(cr, 1.0);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const Face& f : faces) {
-        const Rgb base = bodyColour(f.body);
+        const Rgb base = tint ? *tint : bodyColour(f.body);
         polyline(cr, f.px, true);
-        setColour(cr, scaled(base, 0.78 + 0.22 * f.facing)); // faces turned away are darker
+        setColour(cr, scaled(base, 0.78 + 0.22 * f.facing), alpha); // faces turned away are darker
         cairo_fill_preserve(cr);
-        setColour(cr, scaled(base, 0.5));
+        setColour(cr, scaled(base, 0.5), tint ? 0.8 : 1.0);
         cairo_stroke(cr);
     }
 }
 
-void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel) {
+void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
+                  const Rgb& colour = skeletonColour()) {
     const figure::Skeleton& skeleton = figure.skeleton;
     const std::size_t n = std::min(request.joints.size(), static_cast<std::size_t>(skeleton.jointCount()));
-    setColour(cr, skeletonColour(), 0.9);
+    setColour(cr, colour, 0.9);
     cairo_set_line_width(cr, 1.6);
     cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
     // The root (joint 0, "origin" in id's models) is the entity origin, not a bone end: no line leads to it,
@@ -106,7 +115,7 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
         cairo_new_sub_path(cr);
         cairo_arc(cr, p.x(), p.y(), 2.4, 0, 2 * kPi);
     }
-    setColour(cr, skeletonColour());
+    setColour(cr, colour);
     cairo_fill_preserve(cr);
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_set_line_width(cr, 0.8);
@@ -114,9 +123,10 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
     if (n > 0) drawRootMark(cr, panel.toPx(request.joints[0].position));
 }
 
-// A cone of half angle `halfAngle` about `axis` from `apex`: its rim and four generators.
+// A cone of half angle `halfAngle` about `axis` from `apex`: its rim, then four generators in `generators` (their
+// colour and opacity).
 void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, const Vector3d& axis, double halfAngle,
-              double length) {
+              double length, const std::pair<Rgb, double>& generators) {
     const auto [u, v] = perpendicular(axis);
     std::vector<Vector2d> rim;
     constexpr int kSides = 48;
@@ -127,8 +137,18 @@ void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, cons
     }
     polyline(cr, rim, true);
     cairo_stroke(cr);
+    setColour(cr, generators.first, generators.second);
     for (int k = 0; k < kSides; k += kSides / 4) line(cr, panel.toPx(apex), rim[static_cast<std::size_t>(k)]);
     cairo_stroke(cr);
+}
+
+// How much of a limit glyph about `axis` a view shows, in [0, 1]: 1 when the axis lies in the page, 0 when it
+// points at the viewer. A cone seen end-on is a circle round its joint that says little about the limit and hides
+// its neighbours (the shoulders in a side view, the hips and spine from above): it is drawn faint, its generators
+// fading out (smoothly: a threshold would flip between two poses equal but for rounding).
+double inPage(const PanelMapping& panel, const Vector3d& axis) {
+    const double along = axis.normalized().dot(panel.axes.toViewer);
+    return std::sqrt(std::max(0.0, 1.0 - along * along));
 }
 
 // A pyramid: the four edges where both projected angles are at their limits, and the rim joining them.
@@ -169,7 +189,6 @@ void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transfor
 
 void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel,
                 double glyphM) {
-    cairo_set_line_width(cr, 1.1);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const figure::FigureConstraint& c : figure.constraints) {
         if (std::holds_alternative<std::monostate>(c.limit)) continue;
@@ -177,27 +196,36 @@ void drawLimits(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
         const figure::Transform body2 = body2Frame(request, c);
         const figure::Transform frame2 = body2 * c.frameInBody2;
         const Rgb colour = constraintColour(c.type);
-        setColour(cr, colour, 0.85);
         Vector3d shaft = Vector3d::Zero();
         double shaftLength = glyphM * 1.15;
+        // Faint where the view shows little of the glyph (see inPage); a hinge's arc lies across its axis.
+        double shown = 1;
+        cairo_set_line_width(cr, 0.9);
         if (const auto* cone = std::get_if<figure::ConeLimit>(&c.limit)) {
-            drawCone(cr, panel, frame2.position, body2.rotation * cone->axisInBody2, cone->halfAngleRad, glyphM);
+            const Vector3d axis = body2.rotation * cone->axisInBody2;
+            shown = inPage(panel, axis);
+            setColour(cr, colour, 0.15 + 0.65 * shown);
+            drawCone(cr, panel, frame2.position, axis, cone->halfAngleRad, glyphM,
+                     {colour, (0.15 + 0.65 * shown) * shown * shown}); // generators fade out end-on
             shaft = body1.rotation * cone->shaftInBody1;
         } else if (const auto* p = std::get_if<figure::PyramidLimit>(&c.limit)) {
+            shown = inPage(panel, body2.rotation * p->basisInBody2.col(0));
+            setColour(cr, colour, 0.15 + 0.65 * shown);
             drawPyramid(cr, panel, frame2.position, body2.rotation * p->basisInBody2, p->halfAngle1Rad,
                         p->halfAngle2Rad, glyphM);
             shaft = body1.rotation * p->shaftInBody1;
         } else if (const auto* h = std::get_if<figure::HingeRange>(&c.limit)) {
+            shown = std::abs(frame2.rotation.col(2).dot(panel.axes.toViewer));
+            setColour(cr, colour, 0.15 + 0.65 * shown);
             drawHingeArc(cr, panel, frame2, *h, 0.6 * glyphM);
             shaft = (body1 * c.frameInBody1).rotation.col(0); // body1's side of the angle φ
             shaftLength = 0.7 * glyphM;
         }
         // The shaft: where body1 points now, to read against the limit's outline.
-        setColour(cr, scaled(colour, 0.7));
-        cairo_set_line_width(cr, 2.0);
+        setColour(cr, scaled(colour, 0.7), 0.3 + 0.6 * shown);
+        cairo_set_line_width(cr, 1.6);
         line(cr, panel.toPx(frame2.position), panel.toPx(frame2.position + shaftLength * shaft));
         cairo_stroke(cr);
-        cairo_set_line_width(cr, 1.1);
     }
 }
 
@@ -356,6 +384,17 @@ std::pair<Vector2d, Vector2d> viewBounds(const figure::Figure& figure, const Pic
         add((request.bodies[static_cast<std::size_t>(c.body1)] * c.frameInBody1).position);
         add((body2Frame(request, c) * c.frameInBody2).position);
     }
+    if (request.reference) {
+        PictureRequest reference = request;
+        reference.bodies = request.reference->bodies;
+        reference.joints = request.reference->joints;
+        reference.reference.reset();
+        const auto [rlo, rhi] = viewBounds(figure, reference, view);
+        if (rlo.x() <= rhi.x()) {
+            lo = lo.cwiseMin(rlo);
+            hi = hi.cwiseMax(rhi);
+        }
+    }
     if (lo.x() > hi.x()) return {Vector2d::Zero(), Vector2d::Zero()};
     return {lo, hi};
 }
@@ -366,11 +405,21 @@ void drawPanel(cairo_t* cr, const figure::Figure& figure, const PictureRequest& 
     cairo_rectangle(cr, panel.x, panel.y, panel.width, panel.height);
     cairo_clip(cr);
     drawGround(cr, request, panel);
-    if (request.show.bodies) drawBodies(cr, figure, request, panel);
+    std::optional<Rgb> tint; // with a reference pose: each pose in its colour, the reference beneath
+    if (request.reference) {
+        tint = ownPoseColour();
+        PictureRequest reference = request;
+        reference.bodies = request.reference->bodies;
+        reference.joints = request.reference->joints;
+        if (request.show.bodies) drawBodies(cr, figure, reference, panel, referencePoseColour(), 0.45);
+        if (request.show.skeleton) drawSkeleton(cr, figure, reference, panel, scaled(referencePoseColour(), 0.6));
+    }
+    if (request.show.bodies) drawBodies(cr, figure, request, panel, tint, tint ? 0.55 : 1.0);
     if (request.show.limits) drawLimits(cr, figure, request, panel, style.glyphM);
-    if (request.show.skeleton) drawSkeleton(cr, figure, request, panel);
+    if (request.show.skeleton) drawSkeleton(cr, figure, request, panel, tint ? scaled(*tint, 0.6) : skeletonColour());
     if (request.show.mass) drawMasses(cr, figure, request, panel, style);
     if (request.show.joints) drawAnchors(cr, figure, request, panel);
+    if (request.show.names) drawNames(cr, figure, request, panel);
     drawAxesGizmo(cr, panel);
     cairo_restore(cr);
 }
@@ -456,5 +505,8 @@ void drawRootMark(cairo_t* cr, const Vector2d& at) {
 }
 
 Rgb skeletonColour() { return {0.12, 0.12, 0.18}; }
+
+Rgb referencePoseColour() { return {0.20, 0.45, 0.85}; }
+Rgb ownPoseColour() { return {0.95, 0.55, 0.10}; }
 
 } // namespace afb::cli

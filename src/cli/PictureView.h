@@ -61,5 +61,13 @@ Rgb bodyColour(std::size_t index);
 void drawRootMark(cairo_t* cr, const Eigen::Vector2d& at);
 /// The colour of the md5 skeleton.
 Rgb skeletonColour();
+/// The colour of the reference pose of a two-pose picture (PictureRequest::reference).
+Rgb referencePoseColour();
+/// The colour of the request's own pose in a two-pose picture.
+Rgb ownPoseColour();
+
+/// Body names at their centres of mass and constraint names at their anchors (PictureLayers::names), each on a
+/// white halo, nudged apart where they would overlap.
+void drawNames(cairo_t* cr, const figure::Figure& figure, const PictureRequest& request, const PanelMapping& panel);
 
 } // namespace afb::cli

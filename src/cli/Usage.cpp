@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <sstream>
 
 #include "Suggest.h"
 
@@ -76,7 +77,20 @@ CLI::Validator realCheck(std::function<bool(double)> accept, const std::string& 
         desc);
 }
 
+class OneLineListFormatter : public CLI::Formatter {
+  public:
+    std::string make_subcommand(const CLI::App* sub) const override {
+        std::stringstream out;
+        const std::string& description = sub->get_description();
+        CLI::detail::format_help(out, sub->get_display_name(true), description.substr(0, description.find('\n')),
+                                 column_width_);
+        return out.str();
+    }
+};
+
 } // namespace
+
+std::shared_ptr<CLI::Formatter> helpFormatter() { return std::make_shared<OneLineListFormatter>(); }
 
 void usageError(const std::string& message) { throw CLI::ValidationError(message); }
 

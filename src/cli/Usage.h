@@ -1,6 +1,7 @@
 #pragma once
 // The command line's own errors: exit code 2 with one message naming what was wrong (and, for a misspelt command
 // or option, the closest valid one), and the checks that refuse option values that make no sense.
+#include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,11 @@ namespace afb::cli {
 /// malformed, an entity that is not there); 2 a command line that makes no sense.
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
+
+/// The help formatter of every command: a command's line in its parent's list is the first line of its
+/// description, so the examples that follow it appear in the command's own help alone. Set it on the app before
+/// the commands are added (they take their parent's).
+std::shared_ptr<CLI::Formatter> helpFormatter();
 
 /// Refuses the command line from a command's callback: main reports `afb COMMAND: message` and exits 2.
 [[noreturn]] void usageError(const std::string& message);

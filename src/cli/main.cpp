@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
                  "Diagnostics go to stderr as file:line:col: error: message. Exit code 0 on success, 1 on a failed "
                  "check or bad input, 2 on a command line that makes no sense. A report written to '-' goes to "
                  "stdout alone; the human text goes to stderr then."};
+    app.formatter(afb::cli::helpFormatter()); // before the commands: they take it
     app.require_subcommand(1);
     app.set_version_flag("--version", versionLine());
     int exitCode = 0;

@@ -77,8 +77,10 @@ class AnimParser : detail::Md5ParserBase {
                                         " values each is more than the file can hold");
 
         anim.hierarchy.reserve(reserveFor(numJoints));
-        parseBlock("hierarchy", numJoints, "numJoints",
-                   [&](int i) { anim.hierarchy.push_back(parseHierarchyEntry(i, anim.numAnimatedComponents)); });
+        parseBlock("hierarchy", numJoints, "numJoints", [&](int i) {
+            anim.hierarchyLocations.push_back(m_lex.locationOf(m_lex.peek()));
+            anim.hierarchy.push_back(parseHierarchyEntry(i, anim.numAnimatedComponents));
+        });
         anim.bounds.reserve(reserveFor(numFrames));
         parseBlock("bounds", numFrames, "numFrames", [&](int) {
             Md5Bounds b;
@@ -190,21 +192,62 @@ class AnimParser : detail::Md5ParserBase {
 
 int animatedComponentCount(int flags) { return std::popcount(static_cast<unsigned>(flags & kMd5AllComponents)); }
 
-std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh) {
-    if (anim.hierarchy.size() != mesh.joints.size())
-        return "the anim has " + std::to_string(anim.hierarchy.size()) + " joints, the mesh has " +
-               std::to_string(mesh.joints.size());
-    for (std::size_t i = 0; i < mesh.joints.size(); ++i) {
+namespace {
+
+// The first joint index where the hierarchies differ (the shorter one's count when one is a prefix of the
+// other), and how; nullopt when they match.
+std::optional<std::pair<std::size_t, std::string>> firstDifference(const Md5Anim& anim, const Md5Mesh& mesh) {
+    const std::size_t common = std::min(anim.hierarchy.size(), mesh.joints.size());
+    for (std::size_t i = 0; i < common; ++i) {
         const Md5HierarchyEntry& a = anim.hierarchy[i];
         const Md5Joint& m = mesh.joints[i];
         if (a.name != m.name) // case-sensitive, unlike joint lookups (docs/format.md §8 item 1)
-            return "joint " + std::to_string(i) + " is " + quotedName(a.name) + " in the anim but " +
-                   quotedName(m.name) + " in the mesh (names are compared case-sensitively)";
+            return std::pair{i, "joint " + std::to_string(i) + " is " + quotedName(a.name) + " in the anim but " +
+                                    quotedName(m.name) + " in the mesh (names are compared case-sensitively)"};
         if (a.parent != m.parent)
-            return "joint " + std::to_string(i) + " " + quotedName(a.name) + " has parent " + std::to_string(a.parent) +
-                   " in the anim but " + std::to_string(m.parent) + " in the mesh";
+            return std::pair{i, "joint " + std::to_string(i) + " " + quotedName(a.name) + " has parent " +
+                                    std::to_string(a.parent) + " in the anim but " + std::to_string(m.parent) +
+                                    " in the mesh"};
     }
+    if (anim.hierarchy.size() != mesh.joints.size())
+        return std::pair{common, "the anim has " + std::to_string(anim.hierarchy.size()) + " joints, the mesh has " +
+                                     std::to_string(mesh.joints.size())};
     return std::nullopt;
+}
+
+// Where joint `i` is written in `locations`, if it is.
+std::optional<text::SourceLocation> locationOf(const std::vector<text::SourceLocation>& locations, std::size_t i) {
+    if (i < locations.size() && locations[i].line > 0) return locations[i];
+    return std::nullopt;
+}
+
+} // namespace
+
+std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh) {
+    // The count first, as the engine's CheckModelHierarchy does.
+    if (anim.hierarchy.size() != mesh.joints.size())
+        return "the anim has " + std::to_string(anim.hierarchy.size()) + " joints, the mesh has " +
+               std::to_string(mesh.joints.size());
+    if (auto d = firstDifference(anim, mesh)) return d->second;
+    return std::nullopt;
+}
+
+std::optional<text::Diagnostic> hierarchyMismatchDiagnostic(const Md5Anim& anim, const Md5Mesh& mesh,
+                                                            const std::string& context) {
+    const auto message = hierarchyMismatch(anim, mesh);
+    if (!message) return std::nullopt;
+    // The joint to point at: the first that differs, or, for counts that differ, the first joint past the end of
+    // the shorter file (in the file that has it).
+    const std::size_t joint = anim.hierarchy.size() != mesh.joints.size()
+                                  ? std::min(anim.hierarchy.size(), mesh.joints.size())
+                                  : firstDifference(anim, mesh)->first;
+    const auto inAnim = locationOf(anim.hierarchyLocations, joint), inMesh = locationOf(mesh.jointLocations, joint);
+    text::Diagnostic d;
+    d.message = context + *message;
+    if (inAnim) d.where = *inAnim;
+    else if (inMesh) d.where = *inMesh;
+    if (inAnim && inMesh) d.message += " (the mesh's joint " + std::to_string(joint) + ": " + inMesh->str() + ")";
+    return d;
 }
 
 std::optional<Md5Anim> parseMd5Anim(std::string_view text, const std::string& fileName,

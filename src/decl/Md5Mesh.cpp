@@ -57,6 +57,7 @@ class MeshParser : detail::Md5ParserBase {
             if (m_lex.peek().isPunct('}'))
                 m_lex.fail(m_lex.peek(), "the joints block ends after " + std::to_string(i) +
                                              " joints, but numJoints is " + std::to_string(numJoints));
+            mesh.jointLocations.push_back(m_lex.locationOf(m_lex.peek()));
             mesh.joints.push_back(parseJoint(i));
         }
         const Token close = m_lex.next();

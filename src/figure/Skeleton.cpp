@@ -97,8 +97,9 @@ double angleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 
 std::string quotedName(const std::string& s) { return "\"" + s + "\""; }
 
-// Hand-built values can break what the parsers guarantee; the poses rely on it, so build() checks it again.
-std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::Md5Anim& anim) {
+// Hand-built values can break what the parsers guarantee; the poses rely on it, so build() checks it again: the
+// mesh's joints, then (after the hierarchies are compared) the anim's own counts.
+std::optional<std::string> meshInconsistency(const decl::Md5Mesh& mesh) {
     if (mesh.joints.empty()) return "the mesh has no joints";
     for (std::size_t i = 0; i < mesh.joints.size(); ++i) {
         const int p = mesh.joints[i].parent;
@@ -107,8 +108,10 @@ std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::
                    std::to_string(p) + ": parents must precede children";
     }
     if (mesh.joints[0].parent != -1) return "mesh joint 0 " + quotedName(mesh.joints[0].name) + " is not a root";
-    if (auto m = decl::hierarchyMismatch(anim, mesh))
-        return "af_pose does not match the mesh hierarchy (docs/format.md §7.4): " + *m;
+    return std::nullopt;
+}
+
+std::optional<std::string> animInconsistency(const decl::Md5Anim& anim) {
     if (anim.frames.empty()) return "af_pose has no frames";
     if (anim.baseframe.size() != anim.hierarchy.size())
         return "af_pose has " + std::to_string(anim.baseframe.size()) + " baseframe joints but " +
@@ -127,6 +130,27 @@ std::optional<std::string> inconsistency(const decl::Md5Mesh& mesh, const decl::
     return std::nullopt;
 }
 
+// Reports the first inconsistency of the mesh and its af_pose (at `where`, or at the af_pose's line of the joint
+// whose hierarchy differs, when the files were parsed); true when there is none.
+bool consistent(const decl::Md5Mesh& mesh, const decl::Md5Anim& anim, const text::SourceLocation& where,
+                text::Diagnostics& diagnostics) {
+    if (auto problem = meshInconsistency(mesh)) {
+        diagnostics.error(where, *problem);
+        return false;
+    }
+    if (auto mismatch =
+            decl::hierarchyMismatchDiagnostic(anim, mesh,
+                                              "af_pose does not match the mesh hierarchy (docs/format.md §7.4): ")) {
+        diagnostics.error(mismatch->where.line > 0 ? mismatch->where : where, mismatch->message);
+        return false;
+    }
+    if (auto problem = animInconsistency(anim)) {
+        diagnostics.error(where, *problem);
+        return false;
+    }
+    return true;
+}
+
 // Thresholds for the "load pose is not the runtime pose" warning: well below anything visible, well above
 // rounding.
 constexpr double kPoseMismatchUnits = 1e-3;
@@ -138,10 +162,7 @@ std::optional<Skeleton> Skeleton::build(const decl::Md5Mesh& mesh, const decl::M
                                         const Eigen::Vector3d& modelOffset, text::Diagnostics& diagnostics,
                                         const std::string& context, RootTranslation rootTranslation) {
     const text::SourceLocation where{context, 0, 0};
-    if (auto problem = inconsistency(mesh, afPose)) {
-        diagnostics.error(where, *problem);
-        return std::nullopt;
-    }
+    if (!consistent(mesh, afPose, where, diagnostics)) return std::nullopt;
     if (!modelOffset.allFinite()) {
         diagnostics.error(where, "the model offset is not finite");
         return std::nullopt;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <optional>
 #include <random>
@@ -45,6 +46,7 @@ struct Partial {
     double awakeCpuSeconds = 0;               // of it, in steps that began or ended with a body awake
     double worstAnchor = -1, worstLimit = -1; // for the names of the worst joints
     std::vector<double> restTimes;            // per instance, −1 if never
+    std::vector<char> touched;                // per instance: a body of it has touched something not its own
     std::vector<figure::Transform> firstBodies;
 };
 
@@ -75,6 +77,31 @@ std::string contactName(Scene& scene, const ContactDepth& c) {
     return objectName(scene, c.a) + " / " + objectName(scene, c.b);
 }
 
+// A contact point this close (metres) is a touch: Bullet keeps points up to its breaking threshold apart.
+constexpr double kTouchM = 1e-3;
+
+// Marks the instances with a body touching something other than the instance itself (the ground, another
+// instance). Run after each step while some instance has neither touched anything nor come to rest.
+template <class Doll>
+void markTouches(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, std::vector<char>& touched) {
+    std::map<const btCollisionObject*, std::size_t> owner;
+    for (std::size_t k = 0; k < dolls.size(); ++k)
+        for (int i = 0; i < dolls[k]->bodyCount(); ++i) owner[&dolls[k]->collisionObject(i)] = k;
+    btDispatcher& dispatcher = *scene.world().getDispatcher();
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+        const btPersistentManifold& manifold = *dispatcher.getManifoldByIndexInternal(m);
+        bool touching = false;
+        for (int p = 0; p < manifold.getNumContacts() && !touching; ++p)
+            touching = manifold.getContactPoint(p).getDistance() < kTouchM;
+        if (!touching) continue;
+        const auto a = owner.find(manifold.getBody0()), b = owner.find(manifold.getBody1());
+        const bool aIsDoll = a != owner.end(), bIsDoll = b != owner.end();
+        if (aIsDoll && bIsDoll && a->second == b->second) continue; // the instance touching itself
+        if (aIsDoll) touched[a->second] = 1;
+        if (bIsDoll) touched[b->second] = 1;
+    }
+}
+
 // CPU time this thread has used, seconds (what the cost of a method is measured in: not wall time, so other
 // threads and processes on the machine do not count).
 double threadCpuSeconds() {
@@ -91,6 +118,11 @@ Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, c
                 bool holdsFirst, int steps, const DropObserver* observer) {
     Partial out;
     out.restTimes.assign(dolls.size(), -1);
+    // A figure hung from the world (a constraint with no body2) rests in the air by design: it counts as touching.
+    const bool hung =
+        !dolls.empty() && std::any_of(dolls[0]->figure().constraints.begin(), dolls[0]->figure().constraints.end(),
+                                      [](const figure::FigureConstraint& c) { return c.body2 < 0; });
+    out.touched.assign(dolls.size(), hung ? 1 : 0);
     if (dolls.empty()) observer = nullptr;
     if (observer) (*observer)(0, dolls[0]->bodyTransforms());
 
@@ -124,6 +156,9 @@ Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, c
         awakeBefore = awake;
         out.r.awakeBodySteps += awake;
 
+        bool pending = false; // an instance that has neither touched anything nor come to rest
+        for (std::size_t k = 0; k < dolls.size(); ++k) pending = pending || (!out.touched[k] && out.restTimes[k] < 0);
+        if (pending) markTouches(scene, dolls, out.touched);
         bool allRest = true;
         for (std::size_t k = 0; k < dolls.size(); ++k) {
             const Doll& d = *dolls[k];
@@ -156,7 +191,11 @@ Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, c
                     out.r.explodedAtS = now;
                 }
             }
-            if (d.atRest() && out.restTimes[k] < 0) out.restTimes[k] = now;
+            if (d.atRest() && out.restTimes[k] < 0) {
+                out.restTimes[k] = now;
+                // At rest before touching anything: its rules froze it in the air (a spawn at rest is meant so).
+                if (!out.touched[k] && !o.startAtRest) ++out.r.frozenBeforeContact;
+            }
             allRest = allRest && d.atRest();
         }
         const ContactDepth deepest = scene.deepestContact();
@@ -290,6 +329,7 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
             if (p.exploded && (!r.exploded || *p.explodedAtS < *r.explodedAtS)) r.explodedAtS = p.explodedAtS;
             r.exploded = r.exploded || p.exploded;
             r.nonFinite = r.nonFinite || p.nonFinite;
+            r.frozenBeforeContact += p.frozenBeforeContact;
         }
         for (double t : parts[w].restTimes) {
             allRested = allRested && t >= 0;

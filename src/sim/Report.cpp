@@ -64,6 +64,9 @@ const std::vector<Field>& fields() {
          [](const DropResult& r) { return json(r.nonFinite); }},
         {"settle_time_s", "every instance at rest by its figure's rules, else null",
          [](const DropResult& r) { return optional(r.settleTimeS); }},
+        {"frozen_before_contact",
+         "instances put to rest by their rules (maxMoveTime) before they touched anything: frozen in the air",
+         [](const DropResult& r) { return json(r.frozenBeforeContact); }},
     };
     return table;
 }

@@ -25,3 +25,8 @@ endif()
 run(0 ${AFB} draw --base ${SRC} humanoid --at 1 --out ${TMP}/at1.png)
 run(0 ${CHECK} png ${TMP}/at1.png)
 run(1 ${CHECK} same ${TMP}/load.png ${TMP}/at1.png 80 0)
+# --show names: body and constraint names are drawn (the picture differs from the same layers without them).
+run(0 ${AFB} draw --base ${SRC} humanoid --show bodies,joints --out ${TMP}/unnamed.png)
+run(0 ${AFB} draw --base ${SRC} humanoid --show bodies,joints,names --out ${TMP}/names.png)
+run(0 ${CHECK} png ${TMP}/names.png)
+run(1 ${CHECK} same ${TMP}/unnamed.png ${TMP}/names.png 80 0)

@@ -43,6 +43,15 @@ add_test(NAME cli.golden_behaviour
   COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
           "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/golden_behaviour" -P ${CMAKE_CURRENT_LIST_DIR}/golden.cmake)
 # The project's own goldens (tests/golden/*.json) must hold.
+# afb golden compare --junit and --report: the JUnit file against tests/cli/junit.xsd (with xmllint), the Markdown
+# summary and the pictures of failing goldens; and the CI recipe's steps (examples/ci/goldens.sh).
+find_program(AFB_XMLLINT xmllint)
+foreach(_t golden_report ci_recipe)
+  add_test(NAME cli.${_t}
+    COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DCHECK=$<TARGET_FILE:afb_picture_check>"
+            "-DXMLLINT=${AFB_XMLLINT}" "-DSCHEMA=${CMAKE_CURRENT_LIST_DIR}/junit.xsd" "-DSRC=${PROJECT_SOURCE_DIR}"
+            "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/${_t}" -P ${CMAKE_CURRENT_LIST_DIR}/${_t}.cmake)
+endforeach()
 file(GLOB _afb_goldens CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/golden/*.json)
 if(_afb_goldens)
   afb_cli_test(golden_compare 0 ARGS golden compare ${_afb_goldens})
@@ -56,6 +65,13 @@ afb_cli_test(drop_chain 0 ARGS drop --base . chain --seconds 2 MATCH "chain" "Bu
 afb_cli_test(drop_json 0 ARGS drop --base . chain --steps 0 --json - MATCH "\"steps\": 0" "\"final_pose\"" "\"us_per_step\"")
 afb_cli_test(drop_double 0 ARGS drop --base . chain --seconds 1 --precision double MATCH "\\(double\\)")
 afb_cli_test(drop_unknown 1 ARGS drop --base . no_such_entity MATCH "no_such_entity")
+# A figure put to rest by its rules before it touched anything is said to be frozen in the air; a figure hung from
+# the world (the chain) rests in the air by design and is not.
+add_test(NAME cli.drop_frozen_in_air
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/drop_frozen_in_air" -P ${CMAKE_CURRENT_LIST_DIR}/frozen.cmake)
+afb_cli_test(drop_hung_not_frozen 0 ARGS drop --base . chain --height 1000 --seconds 12 --json -
+             MATCH "\"frozen_before_contact\": 0" "\"settle_time_s\": [0-9]")
 # Entities that share a figure are told apart in the table: each row names its entity, then the figure.
 afb_cli_test(drop_entity_rows 0 ARGS drop --base . humanoid humanoid_sleeping --steps 1
              MATCH "humanoid +15 +1 " "humanoid_sleeping \\(humanoid\\) +15 +1 ")
@@ -65,6 +81,12 @@ afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
 afb_cli_test(drop_lod_raw 2 ARGS drop --base . humanoid --steps 1 --lod 6 --method raw MATCH "--lod needs the rigid")
 afb_cli_test(drop_lod_help 0 ARGS drop --help MATCH "--lod")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
+# An af_pose whose hierarchy differs from the mesh's (link5's parent) is reported at the af_pose's line of the joint,
+# naming the mesh's line of it.
+afb_cli_test(inspect_hierarchy_location 1 ARGS inspect --af af/chain.af --mesh models/md5/props/chain/chain.md5mesh
+             --pose tests/cli/data/chain_reparented.md5anim
+             MATCH "tests/cli/data/chain_reparented.md5anim:15:2: error: af_pose does not match the mesh hierarchy"
+                   "joint 5 \"link5\" has parent 3 in the anim but 4 in the mesh \\(the mesh's joint 5: models/md5/props/chain/chain.md5mesh:13:2\\)")
 
 # afb draw: the humanoid as PNG and SVG, checked by afb_picture_check (signature, size, not blank; SVG parses), and
 # the drop pose at --at 0 drawn like the load pose.
@@ -171,6 +193,9 @@ afb_cli_test(inspect_entity_misspelt 1 ARGS inspect --base . --json lampp MATCH 
 afb_cli_test(golden_not_a_golden_file 1 ARGS golden compare README.md MATCH "README.md: error: not a golden file")
 afb_cli_test(help_exit 0 ARGS drop --help MATCH "--count INT:INT in \\[1 - 1048576\\]" "--hz FLOAT:POSITIVE"
              "afb drop --base \\. humanoid --method fast" "--substeps INT" "--split-impulse on\\|off")
+# Every command's help starts with examples of it (the commands read from afb --help).
+add_test(NAME cli.help_examples
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" -P ${CMAKE_CURRENT_LIST_DIR}/help_examples.cmake)
 # afb methods: every method with its summary and every knob with its values and default; one method's knobs, those
 # that differ from the default marked; JSON; a misspelt method.
 afb_cli_test(methods_list 0 ARGS methods MATCH "  fast +Bullet's iterative solve" "  raw +plain Bullet"

@@ -475,3 +475,47 @@ joints {
     REQUIRE(countMismatch);
     CHECK(*countMismatch == "the anim has 3 joints, the mesh has 2");
 }
+
+TEST_CASE("md5anim: a hierarchy mismatch is reported at the lines of the joint", "[md5][anim][errors]") {
+    text::Diagnostics diags;
+    const std::string mesh = R"(MD5Version 10
+commandline ""
+numJoints 3
+numMeshes 0
+joints {
+	"origin" -1 ( 0 0 0 ) ( 0 0 0 )
+	"Body" 0 ( 0 0 0 ) ( 0 0 0 )
+	"Head" 0 ( 0 0 0 ) ( 0 0 0 )
+}
+)";
+    const auto reparented = decl::parseMd5Mesh(mesh, "m.md5mesh", diags);
+    const auto anim = decl::parseMd5Anim(kAnim, "a.md5anim", diags);
+    INFO(diags.str());
+    REQUIRE(reparented);
+    REQUIRE(anim);
+    REQUIRE(anim->hierarchyLocations.size() == 3);
+    const auto d = decl::hierarchyMismatchDiagnostic(*anim, *reparented, "af_pose: ");
+    REQUIRE(d);
+    CHECK(d->str() == "a.md5anim:12:2: error: af_pose: joint 2 \"Head\" has parent 1 in the anim but 0 in the mesh "
+                      "(the mesh's joint 2: m.md5mesh:8:2)");
+
+    // One joint fewer in the mesh: the anim's line of the joint the mesh lacks.
+    const auto shorter = decl::parseMd5Mesh(replaced(replaced(mesh, "numJoints 3", "numJoints 2"),
+                                                     "\t\"Head\" 0 ( 0 0 0 ) ( 0 0 0 )\n", ""),
+                                            "m.md5mesh", diags);
+    REQUIRE(shorter);
+    const auto count = decl::hierarchyMismatchDiagnostic(*anim, *shorter, "");
+    REQUIRE(count);
+    CHECK(count->str() == "a.md5anim:12:2: error: the anim has 3 joints, the mesh has 2");
+
+    // An anim built in code has no lines (and equals the parsed one): the mesh's line is the one known.
+    decl::Md5Anim built = *anim;
+    built.hierarchyLocations.clear();
+    CHECK(built == *anim);
+    const auto unlocated = decl::hierarchyMismatchDiagnostic(built, *reparented, "");
+    REQUIRE(unlocated);
+    CHECK(unlocated->where.line == 8); // the mesh's line, the only one known
+    const auto matching = decl::parseMd5Mesh(replaced(mesh, "\"Head\" 0", "\"Head\" 1"), "m.md5mesh", diags);
+    REQUIRE(matching);
+    CHECK_FALSE(decl::hierarchyMismatchDiagnostic(*anim, *matching, ""));
+}

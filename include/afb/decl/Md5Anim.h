@@ -68,8 +68,15 @@ struct Md5Anim {
     std::vector<Md5Bounds> bounds;            ///< one box per frame
     std::vector<Md5BaseJoint> baseframe;      ///< one entry per joint; root translation NOT zeroed (see above)
     std::vector<std::vector<double>> frames;  ///< `frame k` values, each numAnimatedComponents long, k = index
-    /// Equal when every field is.
-    bool operator==(const Md5Anim&) const = default;
+    /// Where each line of the `hierarchy` block is written (its joint name), one per joint once parsed; empty for
+    /// an anim built in code. Not part of equality.
+    std::vector<text::SourceLocation> hierarchyLocations;
+    /// Equal when every field but hierarchyLocations is.
+    bool operator==(const Md5Anim& other) const {
+        return version == other.version && commandline == other.commandline && frameRate == other.frameRate &&
+               numAnimatedComponents == other.numAnimatedComponents && hierarchy == other.hierarchy &&
+               bounds == other.bounds && baseframe == other.baseframe && frames == other.frames;
+    }
 };
 
 /// Number of bits set in Md5HierarchyEntry::flags: how many components the joint reads from each frame.
@@ -79,6 +86,12 @@ int animatedComponentCount(int flags);
 /// case-sensitively, parent indices), as the engine's CheckModelHierarchy checks them (docs/format.md §7.4);
 /// nullopt when they match.
 std::optional<std::string> hierarchyMismatch(const Md5Anim& anim, const Md5Mesh& mesh);
+
+/// hierarchyMismatch as a diagnostic: an error at the anim's line of the first joint that differs, naming the
+/// mesh's line of that joint (for a joint count that differs: at the first joint one file has and the other
+/// lacks, else without a position); `context` prefixes the message. nullopt when they match.
+std::optional<text::Diagnostic> hierarchyMismatchDiagnostic(const Md5Anim& anim, const Md5Mesh& mesh,
+                                                            const std::string& context);
 
 /// Parses `.md5anim` text. Every count, index and reference is checked (docs/format.md §7.4); on any error:
 /// nullopt, with a `file:line:col` error in `diagnostics` — nothing is half-loaded. `fileName` is used in

@@ -68,8 +68,14 @@ struct Md5Mesh {
     std::string commandline;        ///< `commandline` string as written (exporter notes)
     std::vector<Md5Joint> joints;   ///< `joints` block, in file order; parents precede children
     std::vector<Md5SubMesh> meshes; ///< `mesh` blocks, in file order
-    /// Equal when every field is.
-    bool operator==(const Md5Mesh&) const = default;
+    /// Where each line of the `joints` block is written (its joint name), one per joint once parsed; empty for a
+    /// mesh built in code. Not part of equality.
+    std::vector<text::SourceLocation> jointLocations;
+    /// Equal when every field but jointLocations is.
+    bool operator==(const Md5Mesh& other) const {
+        return version == other.version && commandline == other.commandline && joints == other.joints &&
+               meshes == other.meshes;
+    }
 };
 
 /// Index of the first joint named `name`, compared ignoring ASCII case as the engine's GetJointHandle does

@@ -71,6 +71,10 @@ struct DropResult {
     /// (a figure that builds must simulate to finite state). Implies `exploded`.
     bool nonFinite = false;
     std::optional<double> settleTimeS;
+    /// Instances put to rest by their figure's rules before any of their bodies touched anything but themselves:
+    /// frozen in the air (in a fall only `maxMoveTime` does that). Instances spawned at rest, and figures hung from
+    /// the world (a constraint to the world), are not counted.
+    int frozenBeforeContact = 0;
     double entity[7] = {0, 0, 0, 1, 0, 0, 0}; ///< first instance's entity transform: x y z, qw qx qy qz
     std::vector<JointPose> finalPose;         ///< first instance, model space
     /// First instance's body frames (centre of mass, principal axes) at the end of the run, world space, metres.

@@ -1,0 +1,42 @@
+# cmake -P test of the CI recipe (examples/ci): goldens.sh's record and compare steps on the bundled chain, with
+# the afb under test (AFB, SRC, TMP given; XMLLINT and SCHEMA as for golden_report.cmake). Both CI files run the
+# script's three steps.
+file(REMOVE_RECURSE "${TMP}")
+file(MAKE_DIRECTORY "${TMP}/content")
+file(COPY "${SRC}/af" "${SRC}/def" "${SRC}/models" DESTINATION "${TMP}/content")
+include("${CMAKE_CURRENT_LIST_DIR}/run.cmake")
+
+foreach(ci github-goldens.yml gitlab-goldens.yml)
+  file(READ "${SRC}/examples/ci/${ci}" yaml)
+  foreach(step install record compare)
+    if(NOT yaml MATCHES "goldens\\.sh ${step}\n")
+      message(FATAL_ERROR "examples/ci/${ci} does not run 'goldens.sh ${step}'")
+    endif()
+  endforeach()
+endforeach()
+
+set(script "${SRC}/examples/ci/goldens.sh")
+set(env ${CMAKE_COMMAND} -E env "AFB=${AFB}" "AFB_BASE=${TMP}/content" "AFB_GOLDENS=${TMP}/goldens"
+        "AFB_ENTITIES=chain" "AFB_REPORT=${TMP}/report" "AFB_RECORD=--seconds 2")
+run_to(0 out ${env} bash "${script}" record)
+if(NOT EXISTS "${TMP}/goldens/chain.json")
+  message(FATAL_ERROR "record wrote no golden:\n${out}")
+endif()
+run_to(0 out ${env} bash "${script}" record)
+if(NOT out MATCHES "chain.json exists")
+  message(FATAL_ERROR "a second record did not keep the golden:\n${out}")
+endif()
+run_to(0 out ${env} bash "${script}" compare)
+file(READ "${TMP}/report/junit.xml" xml)
+if(NOT xml MATCHES "<testsuites [^>]*tests=\"1\" failures=\"0\" errors=\"0\"" OR NOT EXISTS "${TMP}/report/summary.md")
+  message(FATAL_ERROR "compare's reports are not as expected:\n${out}\n${xml}")
+endif()
+if(XMLLINT)
+  run_to(0 lint "${XMLLINT}" --noout --schema "${SCHEMA}" "${TMP}/report/junit.xml")
+endif()
+# A golden that no longer holds fails the step.
+file(READ "${TMP}/goldens/chain.json" golden)
+string(JSON golden SET "${golden}" pose 3 position 2 "9")
+file(WRITE "${TMP}/goldens/chain.json" "${golden}")
+run_to(1 out ${env} bash "${script}" compare)
+run_to(2 out bash "${script}" nonsense)
