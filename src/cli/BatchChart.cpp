@@ -150,7 +150,9 @@ std::unique_ptr<BatchJob> makeChartJob(const json& plan, bool forRunning, std::s
 
 void addPlanChart(CLI::App* plan, int& exitCode, char** argv, const std::shared_ptr<std::string>& manifest,
                   const PlanEmitter& emit) {
-    auto* cmd = plan->add_subcommand("chart", "Plan afb chart: one line per figure, method, height, rate and repeat");
+    auto* cmd = plan->add_subcommand("chart", "Plan afb chart: one line per figure, method, height, rate and repeat\n"
+                                              "Examples:\n"
+                                              "  afb plan chart --base . humanoid --repeats 5 --manifest runs.jsonl");
     auto opt = std::make_shared<ChartCli>();
     addChartOptions(cmd, *opt);
     cmd->add_option("--manifest", *manifest, "Manifest to write, JSON lines ('-': stdout)")->capture_default_str();

@@ -139,7 +139,10 @@ std::unique_ptr<BatchJob> makeDropJob(const json& plan, bool forRunning, std::st
 
 void addPlanDrop(CLI::App* plan, int& exitCode, char** argv, const std::shared_ptr<std::string>& manifest,
                  const PlanEmitter& emit) {
-    auto* cmd = plan->add_subcommand("drop", "Plan afb drop: one line per entity");
+    auto* cmd =
+        plan->add_subcommand("drop", "Plan afb drop: one line per entity\n"
+                                     "Examples:\n"
+                                     "  afb plan drop --base . humanoid lamp --height 10 --manifest runs.jsonl");
     auto opt = std::make_shared<DropCli>();
     addDropOptions(cmd, *opt);
     cmd->add_option("--manifest", *manifest, "Manifest to write, JSON lines ('-': stdout)")->capture_default_str();

@@ -134,7 +134,12 @@ std::unique_ptr<BatchJob> makeStressJob(const json& plan, bool forRunning, std::
 
 void addPlanStress(CLI::App* plan, int& exitCode, char** argv, const std::shared_ptr<std::string>& manifest,
                    const PlanEmitter& emit) {
-    auto* cmd = plan->add_subcommand("stress", "Plan afb stress: one line per scenario, method and yaw");
+    auto* cmd =
+        plan->add_subcommand("stress",
+                             "Plan afb stress: one line per scenario, method and yaw\n"
+                             "Examples:\n"
+                             "  afb plan stress --base . --yaws 8 --manifest runs.jsonl\n"
+                             "  afb plan stress --base . --methods fast,default --scenarios chain-mass-1 --manifest -");
     auto opt = std::make_shared<StressCli>();
     addStressOptions(cmd, *opt);
     cmd->add_option("--manifest", *manifest, "Manifest to write, JSON lines ('-': stdout)")->capture_default_str();
