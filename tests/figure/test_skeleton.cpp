@@ -274,27 +274,29 @@ TEST_CASE("descendants scan follows the engine on non-depth-first order", "[figu
 
 TEST_CASE("build reports errors instead of asserting", "[figure][skeleton]") {
     const decl::Md5Mesh m = mesh(kJoints, 5);
-    const auto fails = [&](const decl::Md5Anim& a, const std::string& needle) {
+    // A hierarchy that differs from the mesh's is reported where it differs (the af_pose's joint line, or the
+    // mesh's joint count); what the files cannot locate, at the entity's decl.
+    const auto fails = [&](const decl::Md5Anim& a, const std::string& needle, const std::string& file = "zombie.def") {
         text::Diagnostics d;
         const auto s = Skeleton::build(m, a, Vector3d::Zero(), d, "zombie.def");
         CHECK_FALSE(s);
         REQUIRE(d.errorCount() == 1);
         INFO(d.str());
         CHECK(d.items().front().message.find(needle) != std::string::npos);
-        CHECK(d.items().front().where.file == "zombie.def");
+        CHECK(d.items().front().where.file == file);
     };
     SECTION("joint names are compared case-sensitively against the mesh") {
         std::string h = kHierarchy;
         h.replace(h.find("\"Spine\""), 7, "\"spine\"");
-        fails(anim(h, kBaseframe, {""}, 5, 0), "hierarchy");
+        fails(anim(h, kBaseframe, {""}, 5, 0), "hierarchy", "test.md5anim");
     }
     SECTION("parent indices must match") {
         std::string h = kHierarchy;
         h.replace(h.find("\"Head\" 2"), 8, "\"Head\" 1");
-        fails(anim(h, kBaseframe, {""}, 5, 0), "parent");
+        fails(anim(h, kBaseframe, {""}, 5, 0), "parent", "test.md5anim");
     }
     SECTION("joint counts must match") {
-        fails(anim("\"origin\" -1 0 0\n", "( 0 0 0 ) ( 0 0 0 )\n", {""}, 1, 0), "joints");
+        fails(anim("\"origin\" -1 0 0\n", "( 0 0 0 ) ( 0 0 0 )\n", {""}, 1, 0), "joints", "test.md5mesh");
     }
     SECTION("an anim value without frames") {
         decl::Md5Anim a = anim(kHierarchy, kBaseframe, {""}, 5, 0);
