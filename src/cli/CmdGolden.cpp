@@ -13,6 +13,7 @@
 #include "MethodOptions.h"
 #include "Usage.h"
 #include "afb/figure/Load.h"
+#include "afb/sim/Batch.h"
 #include "afb/sim/Drop.h"
 #include "afb/sim/Report.h"
 #include "afb/text/Files.h"
@@ -20,25 +21,9 @@
 namespace afb::cli {
 namespace {
 
-// FNV-1a, 64 bit: a stable content hash for change detection (not for security).
-std::uint64_t fnv1a(std::string_view data, std::uint64_t h = 1469598103934665603ull) {
-    for (unsigned char c : data) {
-        h ^= c;
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-std::string hex(std::uint64_t v) {
-    char buf[17];
-    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-    return buf;
-}
-
-std::string fileHash(const std::filesystem::path& p) {
-    text::Diagnostics d;
-    const auto data = text::readFile(p, d);
-    return data ? hex(fnv1a(*data)) : "missing";
-}
+// Content hashes shared with the batch manifests (afb/sim/Batch.h).
+using sim::fileHash;
+using sim::fnv1a;
 
 // Every input file of an entity, relative to the content folder, with its hash.
 nlohmann::json inputHashes(const decl::ResolvedEntity& r, const std::filesystem::path& base) {
@@ -57,7 +42,7 @@ std::string stateHash(const sim::DropResult& r) {
         h = fnv1a(std::string_view(reinterpret_cast<const char*>(j.position), sizeof j.position), h);
         h = fnv1a(std::string_view(reinterpret_cast<const char*>(j.quaternion), sizeof j.quaternion), h);
     }
-    return hex(h);
+    return sim::hashHex(h);
 }
 
 struct Run {
