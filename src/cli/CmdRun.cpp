@@ -26,10 +26,12 @@ struct RunCli {
     int threads = 1;
 };
 
-// A non-negative integer from text, or nullopt.
-std::optional<std::size_t> count(const std::string& text) {
-    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 15)
-        return std::nullopt;
+// What count() gives for text that is not a count (a count has at most 15 digits, so it is never this).
+constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
+
+// A non-negative integer from text, or kNoIndex.
+std::size_t count(const std::string& text) {
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 15) return kNoIndex;
     return static_cast<std::size_t>(std::stoull(text));
 }
 
@@ -37,25 +39,26 @@ std::optional<std::size_t> count(const std::string& text) {
 // (--resume alone), or the line SLURM_ARRAY_TASK_ID names.
 std::function<bool(std::size_t)> selection(const RunCli& opt) {
     const char* env = std::getenv("SLURM_ARRAY_TASK_ID");
-    const std::optional<std::size_t> task = env ? count(env) : std::nullopt;
-    if (env && !task) usageError(std::string("SLURM_ARRAY_TASK_ID is not an index: '") + env + "'");
+    const std::size_t task = env ? count(env) : kNoIndex;
+    if (env && task == kNoIndex) usageError(std::string("SLURM_ARRAY_TASK_ID is not an index: '") + env + "'");
     if (opt.index) return [i = *opt.index](std::size_t n) { return n == i; };
     if (!opt.shard.empty()) {
         const std::size_t slash = opt.shard.find('/');
-        const auto k = count(opt.shard.substr(0, slash)),
-                   n = slash == std::string::npos ? std::nullopt : count(opt.shard.substr(slash + 1));
-        if (!k || !n || *n == 0 || *k >= *n) usageError("--shard " + opt.shard + ": expected K/N with 0 <= K < N");
-        return [k = *k, n = *n](std::size_t i) { return i % n == k; };
+        const std::size_t k = count(opt.shard.substr(0, slash)),
+                          n = slash == std::string::npos ? kNoIndex : count(opt.shard.substr(slash + 1));
+        if (k == kNoIndex || n == kNoIndex || n == 0 || k >= n)
+            usageError("--shard " + opt.shard + ": expected K/N with 0 <= K < N");
+        return [k, n](std::size_t i) { return i % n == k; };
     }
     if (opt.shards) {
-        if (!task) usageError("--shards needs SLURM_ARRAY_TASK_ID (or give --shard K/N)");
-        if (*task >= *opt.shards)
-            usageError("SLURM_ARRAY_TASK_ID " + std::to_string(*task) + " is not below --shards " +
-                       std::to_string(*opt.shards));
-        return [k = *task, n = *opt.shards](std::size_t i) { return i % n == k; };
+        if (task == kNoIndex) usageError("--shards needs SLURM_ARRAY_TASK_ID (or give --shard K/N)");
+        const std::size_t n = *opt.shards;
+        if (task >= n)
+            usageError("SLURM_ARRAY_TASK_ID " + std::to_string(task) + " is not below --shards " + std::to_string(n));
+        return [task, n](std::size_t i) { return i % n == task; };
     }
     if (opt.resume) return [](std::size_t) { return true; };
-    if (task) return [i = *task](std::size_t n) { return n == i; };
+    if (task != kNoIndex) return [task](std::size_t n) { return n == task; };
     usageError("give --index I, --shard K/N or --resume (or run as a Slurm array task)");
 }
 
