@@ -20,6 +20,7 @@
 #include "afb/Version.h"
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Motor.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/bullet/RagdollSolver.h"

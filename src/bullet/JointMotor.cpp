@@ -69,7 +69,7 @@ void JointMotorConstraint::getInfo2(btConstraintInfo2* info) {
     if (rowCount() == 0) return;
     // The spring and damper at the end of the step (module comment in JointMotor.h).
     const double h = 1.0 / double(info->fps);
-    const double omega = 2 * SIMD_PI * m_gains.frequencyHz;
+    const double omega = 2 * SIMD_PI * std::min(m_gains.frequencyHz, kMaxFrequencyPerStepRate / h);
     const double zeta = m_gains.dampingRatio;
     const double denominator = h * omega + 2 * zeta;
     const auto rate = btScalar(omega / denominator);    // per unit error

@@ -7,13 +7,18 @@
 
 namespace afb::bullet {
 
+/// The highest motor frequency, as a fraction of the step rate (ω·h ≤ π/2; JointMotorConstraint).
+inline constexpr double kMaxFrequencyPerStepRate = 0.25;
+
 /// Up to three angular rows (or one linear row) between two rigid bodies, each a soft constraint toward the
 /// target: with the row's effective mass m, natural frequency ω = 2π·f and damping ratio ζ, the impulse λ of a
 /// step h satisfies J·v + λ·cfm/m = (ω·e + 2ζ·v*)/(h·ω + 2ζ) with cfm = 1/(h·(h·ω² + 2ζ·ω)), where e is the error
 /// to the target and v* the target velocity: the spring k = m·ω² and damper c = 2m·ζ·ω evaluated at the end of the
-/// step. Bullet's own row update is unstable once cfm exceeds 1 (a soft motor at a fast step); RagdollSolver
-/// rescales the rows of a constraint tracked as soft so its update is exact (RagdollSolver::track), so the
-/// motor must be solved by a RagdollSolver.
+/// step. The frequency is held to a quarter of the step rate (kMaxFrequencyPerStepRate): above it the rows correct
+/// nearly the whole error in one step, and a figure's coupled rows, solved by iterations with its contacts, then
+/// gain energy (a humanoid held at 400 Hz by motors on a 15 Hz step does). Bullet's own row update is unstable
+/// once cfm exceeds 1 (a soft motor at a fast step); RagdollSolver rescales the rows of a constraint tracked as
+/// soft so its update is exact (RagdollSolver::track), so the motor must be solved by a RagdollSolver.
 class JointMotorConstraint : public btTypedConstraint {
   public:
     /// What the motor drives.
@@ -31,6 +36,8 @@ class JointMotorConstraint : public btTypedConstraint {
     btScalar getParam(int, int) const override { return 0; }
 
     void setGains(const MotorGains& gains) { m_gains = gains; }
+    /// Whether the gains give the motor any rows (a frequency above 0).
+    bool active() const { return rowCount() > 0; }
     const MotorGains& gains() const { return m_gains; }
     /// Target rotation of frame B relative to frame A (Rotation, RotationAboutZ: only the part about Z counts)
     /// and target angular velocity of B relative to A, in frame A, rad/s.

@@ -9,6 +9,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include "EngineFriction.h"
+#include "JointMotor.h"
 #include "Multibody.h"
 #include "ObjectArena.h"
 #include "RagdollAction.h"
@@ -391,7 +392,9 @@ void Ragdoll::thawBodies() {
         m_world.addRigidBody(&b, m_group, m_masks[i]);
         b.setSleepingThresholds(0, 0);
     }
-    for (btTypedConstraint* constraint : m_constraints) m_world.addConstraint(constraint);
+    for (std::size_t k = 0; k < m_constraints.size(); ++k)
+        if (m_roles[k] != RowRole::Motor || static_cast<JointMotorConstraint*>(m_constraints[k])->active())
+            m_world.addConstraint(m_constraints[k]); // a motor switched off stays out (applyMotorGains)
 }
 
 void Ragdoll::wake() {
@@ -425,6 +428,7 @@ void Ragdoll::removeBulletObjects() {
     m_constraints.clear();
     m_roles.clear();
     m_main.clear();
+    m_motors.clear();
     m_frames.clear();
     m_rigidFrames.clear();
     m_feedback.clear();

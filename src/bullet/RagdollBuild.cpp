@@ -126,6 +126,7 @@ void Ragdoll::addConstraints() {
                              c.body2 >= 0 ? bodyInRigid(c.body2).getBasis() : m_spawn.getBasis()};
         addJoint(c, buildJoint(*m_arena, c, site, policy));
     }
+    if (!m_motorGains.empty()) addMotors(); // rebuilt with a level of detail
 }
 
 // The joint's constraints into the world in a fixed order (main, its friction, its limit), each with its role.

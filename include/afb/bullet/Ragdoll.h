@@ -11,6 +11,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Motor.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/detail/Probes.h"
 #include "afb/figure/Load.h"
@@ -29,6 +30,7 @@ class RagdollWorldLink;
 inline constexpr double kBodyRestitution = 0.4;
 
 class Ragdoll;
+class JointMotorConstraint;
 struct JointParts;
 
 /// What the rows of one of a ragdoll's Bullet constraints do (Ragdoll::bulletConstraintRole).
@@ -37,6 +39,7 @@ enum class RowRole {
     Limit,    ///< a limit of its own: cone, pyramid or hinge range (one-sided)
     Friction, ///< joint friction, bounded by the joint's reaction (docs/format.md §4.8)
     Spring,   ///< a spring's length (docs/format.md §4.7)
+    Motor,    ///< a joint motor toward a target pose (Ragdoll::setMotorGains; soft, bounded)
 };
 
 /// What tripped a ragdoll's explosion guard.
@@ -291,6 +294,29 @@ class Ragdoll {
     /// The wake threshold of applyImpulse, N·s.
     double impulseThresholdNs() const { return 500.0 * figure().units.metresPerUnit; }
 
+    /// Sets the gains of every joint motor (afb/bullet/Motor.h, docs/motors.md): one motor per figure constraint
+    /// whose joint has free axes (ball-and-socket and universal: its whole relative rotation; hinge: its angle;
+    /// slider: its offset; none for fixed joints, springs and joints inside a merged body). A frequency of 0
+    /// switches them off: the ragdoll then moves exactly as a limp one. The motors' first setting adds them to the
+    /// world; until driveToPose they hold the figure's load pose. Rigid backend spawned through a RagdollWorld
+    /// only (the motor's soft rows need its solver): returns false and changes nothing otherwise.
+    [[nodiscard]] bool setMotorGains(const MotorGains& gains);
+    /// Sets the gains of the motor of figure constraint `constraint` (per-joint strength; a frequency of 0 lets that
+    /// joint go limp). False, changing nothing, where setMotorGains(gains) would refuse, for an index out of range,
+    /// or for a constraint without a motor (hasMotor).
+    [[nodiscard]] bool setMotorGains(int constraint, const MotorGains& gains);
+    /// The gains of figure constraint `constraint`'s motor (frequency 0 until set).
+    MotorGains motorGains(int constraint) const;
+    /// Whether figure constraint `constraint` gets a motor (see setMotorGains).
+    bool hasMotor(int constraint) const;
+    /// Sets every motor's target from a pose: one state per body (body order, world body frames and velocities, as
+    /// bodyStates() gives them, e.g. figure::bodiesFromJoints of an animation frame). Each motor drives its joint
+    /// toward the rotation (hinge: angle; slider: offset) of body2 relative to body1 that the pose gives, and toward
+    /// their relative velocity; only relative motion counts, so the pose's placement in the world does not matter
+    /// (unless a constraint ties a body to the world). Does not wake a ragdoll at rest. Returns false and changes
+    /// nothing when the number of states is not bodyCount() or a state is not finite.
+    [[nodiscard]] bool driveToPose(std::span<const figure::BodyState> target);
+
     /// True while the figure is at rest by its own rules (docs/format.md §6.1). Spawned through a RagdollWorld, its
     /// bodies are then frozen (frozen()); in a plain world they are asleep in Bullet.
     bool atRest() const;
@@ -347,7 +373,10 @@ class Ragdoll {
     void addConstraints();
     void addJoint(const figure::FigureConstraint& c, const JointParts& parts);
     void filterPairs();
-    void freezeBodies(); ///< rest as static bodies (RagdollWorld's frozen rest)
+    void addMotors(); ///< motors of every joint that has one, with their gains and targets (m_motorGains)
+    bool motorsAllowed() const;
+    void applyMotorGains(std::size_t constraint); ///< m_motorGains to its motor, in or out of the world
+    void freezeBodies();                          ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
     // What the RagdollWorld that spawned it reaches (spawn, sinking): src/bullet/RagdollWorldLink.h, the one way in.
     friend class detail::RagdollWorldLink;
@@ -387,6 +416,17 @@ class Ragdoll {
     std::unique_ptr<RigidLayout> m_lodLayout;                      ///< the level of detail in force, or null
     std::vector<std::unique_ptr<btCollisionShape>> m_lodCompounds; ///< its compound shapes
     std::unique_ptr<detail::MultibodyRagdoll> m_multibody;         ///< the multibody backend, or null for the rigid one
+    /// A joint motor's target: frame B's rotation in frame A and B's angular velocity relative to A in frame A
+    /// (sliders: the offset along the axis and its rate).
+    struct MotorTarget {
+        btQuaternion rotation = btQuaternion::getIdentity();
+        btVector3 angularVelocity{0, 0, 0};
+        btScalar offset = 0;
+        btScalar speed = 0;
+    };
+    std::vector<MotorGains> m_motorGains;        ///< per figure constraint; empty until motors are first set
+    std::vector<MotorTarget> m_motorTargets;     ///< per figure constraint
+    std::vector<JointMotorConstraint*> m_motors; ///< per figure constraint, null where none (owned by m_arena)
 };
 
 } // namespace afb::bullet

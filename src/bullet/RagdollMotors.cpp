@@ -1,0 +1,151 @@
+// Joint motors of the rigid backend (Ragdoll::setMotorGains, Ragdoll::driveToPose; docs/motors.md).
+#include <cmath>
+#include <optional>
+
+#include "JointMotor.h"
+#include "ObjectArena.h"
+#include "RagdollWorldLink.h"
+#include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollSolver.h"
+#include "afb/detail/Convert.h"
+
+namespace afb::bullet {
+namespace {
+
+using Axes = JointMotorConstraint::Axes;
+
+// What a joint type's motor drives: its free axes (none for a fixed joint or a spring).
+std::optional<Axes> motorAxes(figure::JointType type) {
+    switch (type) {
+    case figure::JointType::BallAndSocket:
+    case figure::JointType::Universal: return Axes::Rotation;
+    case figure::JointType::Hinge: return Axes::RotationAboutZ;
+    case figure::JointType::Slider: return Axes::SlideAlongX;
+    case figure::JointType::Fixed:
+    case figure::JointType::Spring: return std::nullopt;
+    }
+    return std::nullopt;
+}
+
+bool finite(const figure::BodyState& s) {
+    return s.pose.rotation.allFinite() && s.pose.position.allFinite() && s.linearVelocity.allFinite() &&
+           s.angularVelocity.allFinite();
+}
+
+} // namespace
+
+bool Ragdoll::motorsAllowed() const {
+    return !m_multibody && m_manager != nullptr &&
+           dynamic_cast<const RagdollSolver*>(m_world.getConstraintSolver()) != nullptr;
+}
+
+bool Ragdoll::hasMotor(int constraint) const {
+    const auto& constraints = figure().constraints;
+    if (constraint < 0 || static_cast<std::size_t>(constraint) >= constraints.size()) return false;
+    const auto ci = static_cast<std::size_t>(constraint);
+    return motorAxes(constraints[ci].type).has_value() && !m_layout->internal[ci];
+}
+
+MotorGains Ragdoll::motorGains(int constraint) const {
+    if (m_motorGains.empty() || !hasMotor(constraint)) return {};
+    return m_motorGains[static_cast<std::size_t>(constraint)];
+}
+
+bool Ragdoll::setMotorGains(const MotorGains& gains) {
+    if (!motorsAllowed()) return false;
+    const bool first = m_motorGains.empty();
+    const std::size_t n = figure().constraints.size();
+    m_motorGains.assign(n, MotorGains{0});
+    m_motorTargets.resize(n);
+    for (std::size_t ci = 0; ci < n; ++ci)
+        if (hasMotor(static_cast<int>(ci))) m_motorGains[ci] = gains;
+    if (first) {
+        addMotors();
+        // The new constraints are tracked as soft rows by the world (RagdollWorld::trackJoints).
+        detail::RagdollWorldLink::restartWarmStarting(*m_manager, *this);
+        return true;
+    }
+    for (std::size_t ci = 0; ci < n; ++ci) applyMotorGains(ci);
+    return true;
+}
+
+// A motor is in the world only while its gains give it rows: a motor switched off leaves the world's constraints
+// (and the order Bullet solves them in) exactly as without it.
+void Ragdoll::applyMotorGains(std::size_t ci) {
+    JointMotorConstraint* motor = m_motors[ci];
+    if (!motor) return;
+    const bool was = motor->active();
+    motor->setGains(m_motorGains[ci]);
+    if (m_frozen || was == motor->active()) return;
+    if (motor->active()) m_world.addConstraint(motor);
+    else m_world.removeConstraint(motor);
+}
+
+bool Ragdoll::setMotorGains(int constraint, const MotorGains& gains) {
+    if (!motorsAllowed() || !hasMotor(constraint)) return false;
+    if (m_motorGains.empty() && !setMotorGains(MotorGains{0})) return false;
+    const auto ci = static_cast<std::size_t>(constraint);
+    m_motorGains[ci] = gains;
+    applyMotorGains(ci);
+    return true;
+}
+
+bool Ragdoll::driveToPose(std::span<const figure::BodyState> target) {
+    if (!motorsAllowed() || target.size() != static_cast<std::size_t>(bodyCount())) return false;
+    for (const figure::BodyState& s : target)
+        if (!finite(s)) return false;
+    if (m_motorGains.empty() && !setMotorGains(MotorGains{0})) return false;
+    const auto& constraints = figure().constraints;
+    for (std::size_t ci = 0; ci < constraints.size(); ++ci) {
+        if (!hasMotor(static_cast<int>(ci))) continue;
+        const figure::FigureConstraint& c = constraints[ci];
+        const figure::BodyState& s1 = target[static_cast<std::size_t>(c.body1)];
+        const figure::BodyState* s2 = c.body2 >= 0 ? &target[static_cast<std::size_t>(c.body2)] : nullptr;
+        // The joint's two frames where the pose puts them (frame B stays in the world for a world constraint).
+        const btTransform fa = toBt(s1.pose) * m_frames[ci].first;
+        const btTransform fb = s2 ? toBt(s2->pose) * m_frames[ci].second : m_frames[ci].second;
+        const btVector3 w1 = toBt(s1.angularVelocity), w2 = s2 ? toBt(s2->angularVelocity) : btVector3(0, 0, 0);
+        MotorTarget& t = m_motorTargets[ci];
+        (fa.getBasis().transpose() * fb.getBasis()).getRotation(t.rotation);
+        t.angularVelocity = fa.getBasis().transpose() * (w2 - w1);
+        // Sliders: frame B's origin along its X from frame A's, and the rate of that offset as the slide row
+        // measures it (B's frame origin moving with B, against the point of A under it).
+        const btVector3 axis = fb.getBasis().getColumn(0), at = fb.getOrigin();
+        t.offset = (at - fa.getOrigin()).dot(axis);
+        const btVector3 c1 = toBt(s1.pose.position);
+        const btVector3 vB =
+            s2 ? toBt(s2->linearVelocity) + w2.cross(at - toBt(s2->pose.position)) : btVector3(0, 0, 0);
+        const btVector3 vA = toBt(s1.linearVelocity) + w1.cross(at - c1);
+        t.speed = (vB - vA).dot(axis);
+        if (JointMotorConstraint* motor = m_motors[ci]) {
+            motor->setRotationTarget(t.rotation, t.angularVelocity);
+            motor->setSlideTarget(t.offset, t.speed);
+        }
+    }
+    return true;
+}
+
+// One motor per joint that has one, between the joint's rigid bodies in the joint's frames, after the joints (so a
+// ragdoll without motors keeps its constraint order); only those switched on go into the world. A frozen ragdoll's
+// constraints are out of the world; thawing adds these with the rest.
+void Ragdoll::addMotors() {
+    const auto& constraints = figure().constraints;
+    m_motors.assign(constraints.size(), nullptr);
+    for (std::size_t ci = 0; ci < constraints.size(); ++ci) {
+        const figure::FigureConstraint& c = constraints[ci];
+        const std::optional<Axes> axes = motorAxes(c.type);
+        if (!axes || !m_main[ci]) continue;
+        auto* motor = m_arena->make<JointMotorConstraint>(body(c.body1), other(c.body2), m_rigidFrames[ci].first,
+                                                          m_rigidFrames[ci].second, *axes);
+        const MotorTarget& t = m_motorTargets[ci];
+        motor->setGains(m_motorGains[ci]);
+        motor->setRotationTarget(t.rotation, t.angularVelocity);
+        motor->setSlideTarget(t.offset, t.speed);
+        m_motors[ci] = motor;
+        if (!m_frozen && motor->active()) m_world.addConstraint(motor);
+        m_constraints.push_back(motor);
+        m_roles.push_back(RowRole::Motor);
+    }
+}
+
+} // namespace afb::bullet

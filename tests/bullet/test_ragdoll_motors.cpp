@@ -1,0 +1,223 @@
+// A ragdoll's joint motors (Ragdoll::setMotorGains, Ragdoll::driveToPose): the target pose is one the figure can
+// take (the humanoid after it came to rest on the ground, so every joint holds and every limit is met), reached by
+// the motors from the load pose; gains of 0 change nothing; stiff motors stay stable at any step; and where motors
+// cannot run they are refused.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "EntityFixture.h"
+#include "afb/bullet/RagdollAsset.h"
+#include "afb/figure/Lod.h"
+#include "afb/sim/Scene.h"
+
+using namespace afb;
+
+namespace {
+
+constexpr double kDt = 1.0 / 60;
+
+// Frame B's rotation in frame A of every constraint, now.
+std::vector<btQuaternion> relativeRotations(const bullet::Ragdoll& r) {
+    std::vector<btQuaternion> out;
+    for (std::size_t i = 0; i < r.figure().constraints.size(); ++i) {
+        const auto [a, b] = r.constraintFramesWorld(static_cast<int>(i));
+        btQuaternion q;
+        (a.getBasis().transpose() * b.getBasis()).getRotation(q);
+        out.push_back(q);
+    }
+    return out;
+}
+
+double angleBetween(const btQuaternion& a, const btQuaternion& b) {
+    const double d = std::abs(double(a.dot(b)));
+    return 2 * std::acos(std::min(1.0, d));
+}
+
+bullet::SpawnOptions at(double heightM) {
+    bullet::SpawnOptions where;
+    where.entityTransform =
+        btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.6)), btVector3(0, 0, btScalar(heightM)));
+    where.comeToRest = false;
+    return where;
+}
+
+// The humanoid dropped from 1 m after 3 s on the ground: its body states and its joints' relative rotations.
+struct RestingPose {
+    std::vector<figure::BodyState> states;
+    std::vector<btQuaternion> rotations;
+};
+RestingPose restingPose(const std::shared_ptr<const bullet::RagdollAsset>& asset) {
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    for (int s = 0; s < 180; ++s) scene.step(kDt);
+    return {r.bodyStates(), relativeRotations(r)};
+}
+
+// The largest angle (rad) between a motor joint's relative rotation now and in `target`.
+double worstMotorError(const bullet::Ragdoll& r, const std::vector<btQuaternion>& target) {
+    const std::vector<btQuaternion> now = relativeRotations(r);
+    double worst = 0;
+    for (std::size_t i = 0; i < now.size(); ++i)
+        if (r.hasMotor(static_cast<int>(i))) worst = std::max(worst, angleBetween(now[i], target[i]));
+    return worst;
+}
+
+} // namespace
+
+TEST_CASE("motors: a weightless humanoid driven from its load pose reaches a resting pose to within 1 degree",
+          "[bullet][motors]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    const RestingPose target = restingPose(asset);
+
+    sim::SceneSettings weightless;
+    weightless.gravityMps2 = 0;
+    weightless.ground = false;
+    sim::Scene scene(*bullet::methodPreset("default"), weightless);
+    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    const double before = worstMotorError(r, target.rotations);
+    INFO("load pose to resting pose: " << before * 180 / M_PI << " degrees");
+    REQUIRE(before > 0.5); // the two poses differ by more than 30 degrees at some joint
+
+    bullet::MotorGains gains;
+    gains.frequencyHz = 4;
+    REQUIRE(r.setMotorGains(gains));
+    REQUIRE(r.driveToPose(target.states));
+    for (int s = 0; s < 120; ++s) scene.step(kDt);
+    const double after = worstMotorError(r, target.rotations);
+    INFO("after 2 s of 4 Hz motors: " << after * 180 / M_PI << " degrees");
+    CHECK(after < 1.0 * M_PI / 180);
+    CHECK(r.guardTrips() == 0);
+}
+
+TEST_CASE("motors: gains of 0 leave a dropped ragdoll moving as a limp one", "[bullet][motors]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const auto asset = bullet::RagdollAsset::create(loaded.figure);
+    auto drop = [&](bool motors) {
+        sim::Scene scene(*bullet::methodPreset("default"));
+        bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+        if (motors) REQUIRE(r.setMotorGains(bullet::MotorGains{0}));
+        for (int s = 0; s < 90; ++s) scene.step(kDt);
+        return r.bodyStates();
+    };
+    const auto limp = drop(false), off = drop(true);
+    REQUIRE(limp.size() == off.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < limp.size(); ++i)
+        worst = std::max(worst, (limp[i].pose.position - off[i].pose.position).norm());
+    CHECK(worst == 0);
+}
+
+TEST_CASE("motors: holding the load pose at 0.4 to 400 Hz, 15 to 240 Hz steps, a dropped humanoid never gains energy",
+          "[bullet][motors]") {
+    // A motor toward a fixed pose is a spring and a damper between two bodies: it stores and dissipates energy but
+    // never makes any, so the figure's kinetic plus potential energy never rises above what it started with.
+    const auto loaded = test::loadEntity("humanoid");
+    const figure::Figure& f = loaded.figure;
+    const auto asset = bullet::RagdollAsset::create(f);
+    auto energy = [&](const std::vector<figure::BodyState>& states) {
+        double e = 0;
+        for (std::size_t i = 0; i < states.size(); ++i) {
+            const figure::FigureBody& b = f.bodies[i];
+            const Eigen::Vector3d w = states[i].pose.rotation.transpose() * states[i].angularVelocity;
+            e += 0.5 * b.massKg * states[i].linearVelocity.squaredNorm() + 0.5 * w.dot(b.inertiaKgM2.cwiseProduct(w)) +
+                 b.massKg * 9.81 * states[i].pose.position.z();
+        }
+        return e;
+    };
+    for (const double hz : {15.0, 30.0, 60.0, 120.0, 240.0})
+        for (const double frequency : {0.4, 4.0, 40.0, 400.0})
+            for (const double zeta : {0.2, 1.0}) {
+                sim::Scene scene(*bullet::methodPreset("default"));
+                bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+                REQUIRE(r.setMotorGains(bullet::MotorGains{frequency, zeta}));
+                const double start = energy(r.bodyStates());
+                double gained = -start;
+                for (int s = 0; s < int(3 * hz); ++s) {
+                    scene.step(1 / hz);
+                    gained = std::max(gained, energy(r.bodyStates()) - start);
+                }
+                INFO(hz << " Hz steps, " << frequency << " Hz motors, damping ratio " << zeta
+                        << ": most energy above the start " << gained << " J");
+                CHECK(r.guardTrips() == 0);
+                CHECK(gained < 0.01 * start); // the start: about 700 J of potential energy above the ground
+            }
+}
+
+TEST_CASE("motors: refused where they cannot run, and only on joints with free axes", "[bullet][motors]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const figure::Figure& f = loaded.figure;
+    const auto asset = bullet::RagdollAsset::create(f);
+    bullet::MotorGains gains;
+    gains.frequencyHz = 4;
+
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    const std::vector<figure::BodyState> states = r.bodyStates();
+    CHECK_FALSE(r.driveToPose(std::span(states).first(states.size() - 1)));
+    std::vector<figure::BodyState> bad = states;
+    bad[0].angularVelocity.x() = NAN;
+    CHECK_FALSE(r.driveToPose(bad));
+    CHECK_FALSE(r.setMotorGains(-1, gains));
+    CHECK_FALSE(r.setMotorGains(static_cast<int>(f.constraints.size()), gains));
+    int motors = 0;
+    for (std::size_t i = 0; i < f.constraints.size(); ++i) {
+        const figure::JointType type = f.constraints[i].type;
+        const bool free = type != figure::JointType::Fixed && type != figure::JointType::Spring;
+        CHECK(r.hasMotor(static_cast<int>(i)) == free);
+        if (!free) CHECK_FALSE(r.setMotorGains(static_cast<int>(i), gains));
+        motors += free ? 1 : 0;
+    }
+    const int constraints = r.bulletConstraintCount();
+    REQUIRE(r.setMotorGains(gains));
+    CHECK(r.bulletConstraintCount() == constraints + motors);
+    CHECK(r.bulletConstraintRole(r.bulletConstraintCount() - 1) == bullet::RowRole::Motor);
+    CHECK(r.motorGains(1).frequencyHz == 4);
+
+    // The multibody backend, and a ragdoll in a world no RagdollWorld manages (its solver does not soften rows).
+    sim::Scene multibody(*bullet::methodPreset("multibody"));
+    bullet::Ragdoll& m = multibody.spawn(asset, at(1.0));
+    CHECK_FALSE(m.setMotorGains(gains));
+    CHECK_FALSE(m.driveToPose(states));
+    btDefaultCollisionConfiguration configuration;
+    btCollisionDispatcher dispatcher(&configuration);
+    btDbvtBroadphase broadphase;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
+    bullet::Ragdoll plain(asset, world);
+    CHECK_FALSE(plain.setMotorGains(gains));
+    CHECK(plain.bulletConstraintCount() == constraints);
+}
+
+TEST_CASE("motors: a level of detail keeps the motors of the joints between its rigid bodies, with their gains",
+          "[bullet][motors]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const figure::Figure& f = loaded.figure;
+    const auto asset = bullet::RagdollAsset::create(f);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    auto motorCount = [&r] {
+        int n = 0;
+        for (int k = 0; k < r.bulletConstraintCount(); ++k) n += r.bulletConstraintRole(k) == bullet::RowRole::Motor;
+        return n;
+    };
+    auto withMotor = [&r, &f] {
+        int n = 0;
+        for (std::size_t i = 0; i < f.constraints.size(); ++i) n += r.hasMotor(static_cast<int>(i));
+        return n;
+    };
+    REQUIRE(r.setMotorGains(bullet::MotorGains{6, 0.7}));
+    const int full = motorCount();
+    CHECK(full == withMotor());
+    REQUIRE(r.setLod(figure::automaticLod(f, 6)).empty());
+    CHECK(motorCount() == withMotor());
+    CHECK(motorCount() < full); // joints inside a merged group have none
+    r.setFullDetail();
+    CHECK(motorCount() == full);
+    for (std::size_t i = 0; i < f.constraints.size(); ++i)
+        if (r.hasMotor(static_cast<int>(i))) CHECK(r.motorGains(static_cast<int>(i)).dampingRatio == 0.7);
+    for (int s = 0; s < 30; ++s) scene.step(kDt);
+    CHECK(r.guardTrips() == 0);
+}
