@@ -26,6 +26,7 @@ json dropPlanJson(const DropCli& opt) {
             {"worlds", opt.worlds ? json(*opt.worlds) : json(nullptr)},
             {"seed", opt.seed ? json(*opt.seed) : json(nullptr)},
             {"lod", d.lod ? json(*d.lod) : json(nullptr)},
+            {"motors", d.motors ? json({d.motors->frequencyHz, d.motors->dampingRatio}) : json(nullptr)},
             {"seconds", d.seconds},
             {"steps", opt.steps ? json(*opt.steps) : json(nullptr)},
             {"hz", d.hz},
@@ -47,6 +48,8 @@ DropCli dropCliFromPlan(const json& plan, figure::UnitSystem& units) {
     if (!plan.at("worlds").is_null()) opt.worlds = plan.at("worlds").get<int>();
     if (!plan.at("seed").is_null()) opt.seed = plan.at("seed").get<std::uint32_t>();
     if (!plan.at("lod").is_null()) opt.drop.lod = plan.at("lod").get<int>();
+    if (const json motors = plan.value("motors", json(nullptr)); !motors.is_null())
+        opt.drop.motors = bullet::MotorGains{motors.at(0).get<double>(), motors.at(1).get<double>()};
     opt.drop.seconds = plan.at("seconds").get<double>();
     if (!plan.at("steps").is_null()) opt.steps = plan.at("steps").get<int>();
     opt.drop.hz = plan.at("hz").get<double>();

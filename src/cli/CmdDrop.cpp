@@ -43,6 +43,12 @@ void addDropOptions(CLI::App* cmd, DropCli& opt) {
                     "bodies, us/body and awake still count the figure's bodies, so the numbers compare with a run "
                     "without --lod")
         ->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("--motor-hz", opt.motorHz,
+                    "Joint motors: every instance holds its load pose with motors of this frequency, Hz (held to a "
+                    "quarter of --hz; docs/motors.md); rigid backend only")
+        ->check(positive());
+    cmd->add_option("--motor-damping", opt.motorDamping, "The motors' damping ratio (default 1: critically damped)")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--seconds", opt.drop.seconds, "Simulated time, s")->check(nonNegative())->capture_default_str();
     cmd->add_option("--steps", opt.steps, "Exact number of steps (overrides --seconds); 0 reports the spawn pose")
         ->check(CLI::NonNegativeNumber);
@@ -70,6 +76,9 @@ void checkDropOptions(const DropCli& opt, const bullet::Method& method) {
     if (opt.json == "-" && opt.csv == "-") usageError("--json - and --csv - both ask for stdout; give one a file");
     if (opt.drop.lod && (sim::isRaw(method) || method.backend != bullet::Backend::Rigid))
         usageError("--lod needs the rigid backend (not the raw method or the multibody backend)");
+    if (opt.motorHz && (sim::isRaw(method) || method.backend != bullet::Backend::Rigid))
+        usageError("--motor-hz needs the rigid backend (not the raw method or the multibody backend)");
+    if (opt.motorDamping && !opt.motorHz) usageError("--motor-damping needs --motor-hz");
     if (opt.gltf.empty()) return;
     std::string ext = opt.gltf.extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -199,9 +208,11 @@ int runDrops(DropCli& opt, const bullet::Method& method) {
 } // namespace
 
 void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv) {
-    auto* cmd = app.add_subcommand("drop", "Drop figures onto a ground plane and report speed, accuracy and stability\n"
-                                           "Examples:\n  afb drop --base . humanoid\n"
-                                           "  afb drop --base . humanoid --method fast --count 4 --height 10 --json -");
+    auto* cmd =
+        app.add_subcommand("drop", "Drop figures onto a ground plane and report speed, accuracy and stability\n"
+                                   "Examples:\n  afb drop --base . humanoid\n"
+                                   "  afb drop --base . humanoid --method fast --count 4 --height 10 --json -\n"
+                                   "  afb drop --base . humanoid --motor-hz 6   # holding its pose with motors");
     cmd->footer(sim::dropFieldsHelp());
     auto opt = std::make_shared<DropCli>();
     addDropOptions(cmd, *opt);
@@ -231,6 +242,7 @@ figure::UnitSystem resolveDropOptions(DropCli& opt, const bullet::Method& method
     opt.drop.steps = opt.steps;
     opt.drop.sleeping = !opt.noSleep;
     opt.drop.worlds = opt.worlds.value_or(std::max(1, opt.drop.threads)); // --threads N alone: N worlds
+    if (opt.motorHz) opt.drop.motors = bullet::MotorGains{*opt.motorHz, opt.motorDamping.value_or(1.0)};
     figure::UnitSystem units;
     units.gravityMps2 = opt.doomGravity ? units.doomGravityMps2() : opt.gravity;
     return units;
@@ -254,6 +266,9 @@ void printDropHeader(const DropCli& opt, const figure::UnitSystem& units) {
     if (opt.drop.lod)
         std::fprintf(text, "  level of detail: --lod %d (automatic merge; each figure's rigid bodies below)\n",
                      *opt.drop.lod);
+    if (const auto& m = opt.drop.motors)
+        std::fprintf(text, "  joint motors: %g Hz, damping ratio %g, holding the load pose\n", m->frequencyHz,
+                     m->dampingRatio);
     std::fflush(text);
 }
 

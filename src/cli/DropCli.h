@@ -31,6 +31,7 @@ struct DropCli {
     double gravity = 9.81;
     bool doomGravity = false, noSleep = false, strict = false, verbose = false;
     std::optional<int> worlds;
+    std::optional<double> motorHz, motorDamping; ///< --motor-hz, --motor-damping
 };
 
 /// Registers afb drop's options on `cmd` (afb drop, afb plan drop).

@@ -95,6 +95,8 @@ json dropResultExact(const DropResult& r) {
             {"method", methodJson(r.method)},
             {"counts", {r.bodies, r.constraints, r.steps}},
             {"lod_bodies", r.lodBodies ? json(*r.lodBodies) : json(nullptr)},
+            {"motors", r.motors ? json({exactNumber(r.motors->frequencyHz), exactNumber(r.motors->dampingRatio)})
+                                : json(nullptr)},
             {"timing", {exactNumber(r.wallMs), exactNumber(r.usPerStep), exactNumber(r.usPerBodyStep)}},
             {"awake_body_steps", r.awakeBodySteps},
             {"cpu", {exactNumber(r.stepCpuMs), exactNumber(r.awakeStepCpuMs), exactNumber(r.cpuUsPerAwakeBodyStep)}},
@@ -122,6 +124,11 @@ DropResult dropResultFromExact(const json& j) {
     r.constraints = counts.at(1).get<int>();
     r.steps = counts.at(2).get<int>();
     if (!j.at("lod_bodies").is_null()) r.lodBodies = j.at("lod_bodies").get<int>();
+    if (const json motors = j.value("motors", json(nullptr)); !motors.is_null()) {
+        double gains[2];
+        readNumbers(motors, gains, 2);
+        r.motors = bullet::MotorGains{gains[0], gains[1]};
+    }
     double timing[3], cpu[3], errors[6];
     readNumbers(j.at("timing"), timing, 3);
     readNumbers(j.at("cpu"), cpu, 3);

@@ -223,8 +223,10 @@ Partial runWorld(const std::shared_ptr<const RagdollAsset>& asset, const DropOpt
         so.comeToRest = o.sleeping;
         so.startAtRest = o.startAtRest;
         if (isRaw(o.method)) scene.spawnRaw(asset, so);
-        else if (Ragdoll& r = scene.spawn(asset, so); lod && r.backend() == bullet::Backend::Rigid)
-            (void)r.setLod(*lod); // a partition of the figure by construction: cannot fail
+        else if (Ragdoll& r = scene.spawn(asset, so); r.backend() == bullet::Backend::Rigid) {
+            if (lod) (void)r.setLod(*lod);                  // a partition of the figure by construction: cannot fail
+            if (o.motors) (void)r.setMotorGains(*o.motors); // rigid, through the scene's RagdollWorld: cannot fail
+        }
     }
     if (isRaw(o.method)) return measure(scene, scene.rawRagdolls(), o, g, holdsFirst, steps, observer);
     return measure(scene, scene.ragdolls(), o, g, holdsFirst, steps, observer);
@@ -297,6 +299,7 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
     r.constraints = static_cast<int>(figure.constraints.size()) * count;
     if (o.lod && !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid)
         r.lodBodies = static_cast<int>(figure::automaticLod(figure, *o.lod).groups.size());
+    if (o.motors && !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid) r.motors = o.motors;
     // Step time: the worlds of one thread one after the other, the threads side by side.
     std::vector<double> threadStepSeconds(static_cast<std::size_t>(threadCount), 0.0);
     for (int w = 0; w < worlds; ++w)

@@ -19,7 +19,8 @@ if(NOT count EQUAL 3)
 endif()
 list(GET lines 0 header)
 set(expected_columns
-    method_label height_m hz repeat figure precision method bodies constraints lod_bodies steps wall_ms us_per_step
+    method_label height_m hz repeat figure precision method bodies constraints lod_bodies motor_hz motor_damping_ratio
+    steps wall_ms us_per_step
     us_per_body_step awake_body_steps step_cpu_ms awake_step_cpu_ms cpu_us_per_awake_body_step max_anchor_error_m worst_anchor_joint
     max_limit_violation_deg worst_limit_joint max_penetration_m worst_contact rest_penetration_m max_energy_gain_j
     max_speed_mps exploded exploded_at_s non_finite settle_time_s frozen_before_contact method.backend method.substeps method.impact-substeps method.iterations

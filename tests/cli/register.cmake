@@ -80,6 +80,14 @@ afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
              MATCH "6 rigid bodies for 15 bodies" "\"lod_bodies\": 6" "\"lod\": 6")
 afb_cli_test(drop_lod_raw 2 ARGS drop --base . humanoid --steps 1 --lod 6 --method raw MATCH "--lod needs the rigid")
 afb_cli_test(drop_lod_help 0 ARGS drop --help MATCH "--lod")
+# afb drop --motor-hz: instances holding their load pose with joint motors, recorded in the report; refused where
+# motors cannot run, and a damping ratio without a frequency.
+afb_cli_test(drop_motors 0 ARGS drop --base . humanoid --steps 30 --motor-hz 6 --json -
+             MATCH "joint motors: 6 Hz, damping ratio 1," "\"motor_hz\": 6" "\"motor_damping_ratio\": 1")
+afb_cli_test(drop_motors_raw 2 ARGS drop --base . humanoid --steps 1 --motor-hz 6 --method raw
+             MATCH "--motor-hz needs the rigid")
+afb_cli_test(drop_motor_damping_alone 2 ARGS drop --base . humanoid --steps 1 --motor-damping 0.5
+             MATCH "--motor-damping needs --motor-hz")
 afb_cli_test(inspect_chain 0 ARGS inspect --base . chain MATCH "figure chain: 10 bodies, 10 constraints, 11 md5 joints")
 # An af_pose whose hierarchy differs from the mesh's (link5's parent) is reported at the af_pose's line of the joint,
 # naming the mesh's line of it.

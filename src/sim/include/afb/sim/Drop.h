@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "afb/bullet/Method.h"
+#include "afb/bullet/Motor.h"
 #include "afb/figure/Figure.h"
 
 namespace afb::sim {
@@ -33,6 +34,9 @@ struct DropOptions {
     /// Level of detail: each instance is switched at spawn to figure::automaticLod with this many rigid bodies
     /// (bullet::Ragdoll::setLod; rigid backend only, ignored for the raw method and the multibody backend).
     std::optional<int> lod;
+    /// Joint motors: every instance holds its load pose with motors of these gains (bullet::Ragdoll::setMotorGains;
+    /// rigid backend only, ignored for the raw method and the multibody backend). None: limp.
+    std::optional<bullet::MotorGains> motors;
 };
 
 /// One joint of a settled pose: model space of the instance, metres.
@@ -50,6 +54,8 @@ struct DropResult {
     int bodies = 0, constraints = 0, steps = 0;
     /// Rigid bodies per instance at the level of detail (DropOptions::lod), or nullopt at full detail.
     std::optional<int> lodBodies;
+    /// The motors' gains (DropOptions::motors) when the instances held their pose with motors, else nullopt.
+    std::optional<bullet::MotorGains> motors;
     double wallMs = 0, usPerStep = 0, usPerBodyStep = 0;
     long long awakeBodySteps = 0;
     /// Thread CPU time inside the steps (CLOCK_THREAD_CPUTIME_ID), summed over the worlds, milliseconds.
