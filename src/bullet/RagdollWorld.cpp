@@ -524,11 +524,12 @@ void RagdollWorld::trackJoints(Ragdoll& r) {
             // Limit rows by their own knob (Method::limitWarmStarting); a limit row is never part of the direct
             // solve's block (its rows are bounded), so it is tracked only to be warm-started. Joint, friction and
             // spring rows by the joint knobs (the direct solve takes only unbounded rows). Motor rows are soft
-            // (JointMotor.h) and bounded: tracked as soft always, warm-started with the joints, never direct.
+            // (JointMotor.h): tracked as soft always, warm-started and solved directly with the joints (a motor
+            // without a torque bound joins the block; a bounded one is solved as joint friction is).
             const RowRole role = r.bulletConstraintRole(k);
             const bool limit = role == RowRole::Limit, motor = role == RowRole::Motor;
             const bool warm = limit ? r.method().limitWarmStarting : r.method().jointWarmStarting;
-            const bool direct = !limit && !motor && r.method().directJoints;
+            const bool direct = !limit && r.method().directJoints;
             if (warm || direct || motor) solver->track(r.bulletConstraint(k), warm, direct, motor);
         }
 }
