@@ -132,14 +132,14 @@ TEST_CASE("motors: holding the load pose at 0.4 to 400 Hz, 15 to 240 Hz steps, a
         return e;
     };
     for (const double hz : {15.0, 30.0, 60.0, 120.0, 240.0})
-        for (const double frequency : {0.4, 4.0, 40.0, 400.0})
+        for (const double frequency : {0.4, 4.0, 400.0}) // 0.1, 1 and 100 times a firm 4 Hz
             for (const double zeta : {0.2, 1.0}) {
                 sim::Scene scene(*bullet::methodPreset("default"));
                 bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
                 REQUIRE(r.setMotorGains(bullet::MotorGains{frequency, zeta}));
                 const double start = energy(r.bodyStates());
                 double gained = -start;
-                for (int s = 0; s < int(3 * hz); ++s) {
+                for (int s = 0; s < int(2 * hz); ++s) {
                     scene.step(1 / hz);
                     gained = std::max(gained, energy(r.bodyStates()) - start);
                 }
