@@ -241,13 +241,12 @@ std::string bulletVersion() {
 
 const char* bulletPrecision() { return sizeof(btScalar) == sizeof(double) ? "double" : "float"; }
 
-DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const DropObserver& observer) {
-    const auto asset = RagdollAsset::create(figure);
-    const int count = std::max(1, o.count);
-    const int worlds = std::clamp(o.worlds, 1, count);
-    const int steps = o.steps ? std::max(0, *o.steps) : static_cast<int>(std::lround(o.seconds * o.hz));
+namespace {
 
-    // Spawn transforms: a grid, each figure turned (fixed set or seeded), its lowest point at the height.
+// Spawn transforms, per world: a grid, each figure turned (fixed set or seeded), its lowest point at the height;
+// instance i goes to world i mod worlds.
+std::vector<std::vector<btTransform>> spawnGrid(const figure::Figure& figure, const DropOptions& o, int count,
+                                                int worlds) {
     std::mt19937 rng(o.seed.value_or(0));
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     btVector3 lo, hi;
@@ -272,46 +271,16 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
         btTransform t(rot, btVector3(btScalar(x), btScalar(y), btScalar(o.heightM - lo.z())));
         perWorld[static_cast<std::size_t>(i % worlds)].push_back(t);
     }
+    return perWorld;
+}
 
-    std::vector<Partial> parts(static_cast<std::size_t>(worlds));
-    const int threadCount = std::clamp(o.threads > 0 ? o.threads : worlds, 1, worlds);
-    // Thread t runs worlds t, t + threadCount, …, one after the other; this thread is thread 0 (world 0, the
-    // observed one). Each world is stepped alone, so the split over threads changes nothing in the results.
-    const auto runThread = [&](int t) {
-        for (int w = t; w < worlds; w += threadCount)
-            parts[static_cast<std::size_t>(w)] = runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], w == 0,
-                                                          steps, w == 0 && observer ? &observer : nullptr);
-    };
-    const auto wall0 = std::chrono::steady_clock::now();
-    {
-        std::vector<std::thread> threads;
-        for (int t = 1; t < threadCount; ++t) threads.emplace_back(runThread, t);
-        runThread(0);
-        for (std::thread& t : threads) t.join();
-    }
-    const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-
-    DropResult r = parts[0].r;
-    r.figure = figure.name;
-    r.precision = bulletPrecision();
-    r.method = o.method;
-    r.bodies = static_cast<int>(figure.bodies.size()) * count;
-    r.constraints = static_cast<int>(figure.constraints.size()) * count;
-    if (o.lod && !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid)
-        r.lodBodies = static_cast<int>(figure::automaticLod(figure, *o.lod).groups.size());
-    if (o.motors && !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid) r.motors = o.motors;
-    // Step time: the worlds of one thread one after the other, the threads side by side.
-    std::vector<double> threadStepSeconds(static_cast<std::size_t>(threadCount), 0.0);
-    for (int w = 0; w < worlds; ++w)
-        threadStepSeconds[static_cast<std::size_t>(w % threadCount)] += parts[static_cast<std::size_t>(w)].stepSeconds;
-    double stepSeconds = *std::max_element(threadStepSeconds.begin(), threadStepSeconds.end());
-    double cpuSeconds = 0, awakeCpuSeconds = 0, lastRest = 0;
+// Into r (world 0's result): the other worlds' counts and worst errors, the settle time over every instance.
+void combineWorlds(const std::vector<Partial>& parts, DropResult& r) {
+    double lastRest = 0;
     double worstAnchor = parts[0].worstAnchor, worstLimit = parts[0].worstLimit;
     bool allRested = true;
     for (std::size_t w = 0; w < parts.size(); ++w) {
         const DropResult& p = parts[w].r;
-        cpuSeconds += parts[w].cpuSeconds; // CPU time adds up over the worlds' threads
-        awakeCpuSeconds += parts[w].awakeCpuSeconds;
         if (w > 0) {
             r.awakeBodySteps += p.awakeBodySteps;
             r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, p.maxAnchorErrorM);
@@ -340,16 +309,31 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
         }
     }
     if (allRested && r.steps > 0) r.settleTimeS = lastRest;
+}
+
+// Into r: wall, step and CPU times. Step time: the worlds of one thread one after the other, the threads side by
+// side; CPU time adds up over the worlds' threads.
+void combineTimes(const std::vector<Partial>& parts, int threadCount, double wallSeconds, DropResult& r) {
+    std::vector<double> threadStepSeconds(static_cast<std::size_t>(threadCount), 0.0);
+    double cpuSeconds = 0, awakeCpuSeconds = 0;
+    for (std::size_t w = 0; w < parts.size(); ++w) {
+        threadStepSeconds[w % static_cast<std::size_t>(threadCount)] += parts[w].stepSeconds;
+        cpuSeconds += parts[w].cpuSeconds;
+        awakeCpuSeconds += parts[w].awakeCpuSeconds;
+    }
+    const double stepSeconds = *std::max_element(threadStepSeconds.begin(), threadStepSeconds.end());
     r.wallMs = wallSeconds * 1000.0;
     r.usPerStep = r.steps > 0 ? stepSeconds * 1e6 / r.steps : 0;
     r.usPerBodyStep = r.bodies > 0 ? r.usPerStep * threadCount / r.bodies : 0;
     r.stepCpuMs = cpuSeconds * 1000.0;
     r.awakeStepCpuMs = awakeCpuSeconds * 1000.0;
     r.cpuUsPerAwakeBodyStep = r.awakeBodySteps > 0 ? awakeCpuSeconds * 1e6 / static_cast<double>(r.awakeBodySteps) : 0;
+}
 
-    // The first instance's pose, in its own model space (metres).
-    r.firstBodies = parts[0].firstBodies;
-    r.firstSpawn = bullet::toEigen(perWorld[0][0]);
+// Into r: the first instance's settled pose, in its own model space (metres).
+void recordFirstPose(const figure::Figure& figure, const Partial& first, const btTransform& spawn, DropResult& r) {
+    r.firstBodies = first.firstBodies;
+    r.firstSpawn = bullet::toEigen(spawn);
     const pose::SkeletonPose pose = pose::driveSkeleton(figure, r.firstBodies);
     const Eigen::Quaterniond qe(pose.entity.rotation);
     const double entity[7] = {
@@ -361,6 +345,47 @@ DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const Dro
         r.finalPose.push_back(
             {figure.skeleton.name(j), {t.position.x(), t.position.y(), t.position.z()}, {q.w(), q.x(), q.y(), q.z()}});
     }
+}
+
+} // namespace
+
+DropResult runDrop(const figure::Figure& figure, const DropOptions& o, const DropObserver& observer) {
+    const auto asset = RagdollAsset::create(figure);
+    const int count = std::max(1, o.count);
+    const int worlds = std::clamp(o.worlds, 1, count);
+    const int steps = o.steps ? std::max(0, *o.steps) : static_cast<int>(std::lround(o.seconds * o.hz));
+    const std::vector<std::vector<btTransform>> perWorld = spawnGrid(figure, o, count, worlds);
+
+    std::vector<Partial> parts(static_cast<std::size_t>(worlds));
+    const int threadCount = std::clamp(o.threads > 0 ? o.threads : worlds, 1, worlds);
+    // Thread t runs worlds t, t + threadCount, …, one after the other; this thread is thread 0 (world 0, the
+    // observed one). Each world is stepped alone, so the split over threads changes nothing in the results.
+    const auto runThread = [&](int t) {
+        for (int w = t; w < worlds; w += threadCount)
+            parts[static_cast<std::size_t>(w)] = runWorld(asset, o, perWorld[static_cast<std::size_t>(w)], w == 0,
+                                                          steps, w == 0 && observer ? &observer : nullptr);
+    };
+    const auto wall0 = std::chrono::steady_clock::now();
+    {
+        std::vector<std::thread> threads;
+        for (int t = 1; t < threadCount; ++t) threads.emplace_back(runThread, t);
+        runThread(0);
+        for (std::thread& t : threads) t.join();
+    }
+    const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+
+    DropResult r = parts[0].r;
+    r.figure = figure.name;
+    r.precision = bulletPrecision();
+    r.method = o.method;
+    r.bodies = static_cast<int>(figure.bodies.size()) * count;
+    r.constraints = static_cast<int>(figure.constraints.size()) * count;
+    const bool rigid = !isRaw(o.method) && o.method.backend == bullet::Backend::Rigid;
+    if (o.lod && rigid) r.lodBodies = static_cast<int>(figure::automaticLod(figure, *o.lod).groups.size());
+    if (o.motors && rigid) r.motors = o.motors;
+    combineWorlds(parts, r);
+    combineTimes(parts, threadCount, wallSeconds, r);
+    recordFirstPose(figure, parts[0], perWorld[0][0], r);
     return r;
 }
 
