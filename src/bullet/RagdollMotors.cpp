@@ -39,15 +39,20 @@ bool Ragdoll::motorsAllowed() const {
            dynamic_cast<const RagdollSolver*>(m_world.getConstraintSolver()) != nullptr;
 }
 
-bool Ragdoll::hasMotor(int constraint) const {
+// Whether figure constraint `constraint`'s type has free axes to drive, whatever the layout: its gains and target
+// are kept for it even while a level of detail merges its bodies (and it has no motor).
+bool Ragdoll::drivable(int constraint) const {
     const auto& constraints = figure().constraints;
-    if (constraint < 0 || static_cast<std::size_t>(constraint) >= constraints.size()) return false;
-    const auto ci = static_cast<std::size_t>(constraint);
-    return motorAxes(constraints[ci].type).has_value() && !m_layout->internal[ci];
+    return constraint >= 0 && static_cast<std::size_t>(constraint) < constraints.size() &&
+           motorAxes(constraints[static_cast<std::size_t>(constraint)].type).has_value();
+}
+
+bool Ragdoll::hasMotor(int constraint) const {
+    return drivable(constraint) && !m_layout->internal[static_cast<std::size_t>(constraint)];
 }
 
 MotorGains Ragdoll::motorGains(int constraint) const {
-    if (m_motorGains.empty() || !hasMotor(constraint)) return {};
+    if (m_motorGains.empty() || !drivable(constraint)) return {};
     return m_motorGains[static_cast<std::size_t>(constraint)];
 }
 
@@ -58,7 +63,7 @@ bool Ragdoll::setMotorGains(const MotorGains& gains) {
     m_motorGains.assign(n, MotorGains{0});
     m_motorTargets.resize(n);
     for (std::size_t ci = 0; ci < n; ++ci)
-        if (hasMotor(static_cast<int>(ci))) m_motorGains[ci] = gains;
+        if (drivable(static_cast<int>(ci))) m_motorGains[ci] = gains;
     if (first) {
         addMotors();
         // The new constraints are tracked as soft rows by the world (RagdollWorld::trackJoints).
@@ -82,7 +87,7 @@ void Ragdoll::applyMotorGains(std::size_t ci) {
 }
 
 bool Ragdoll::setMotorGains(int constraint, const MotorGains& gains) {
-    if (!motorsAllowed() || !hasMotor(constraint)) return false;
+    if (!motorsAllowed() || !drivable(constraint)) return false;
     if (m_motorGains.empty() && !setMotorGains(MotorGains{0})) return false;
     const auto ci = static_cast<std::size_t>(constraint);
     m_motorGains[ci] = gains;
@@ -97,7 +102,7 @@ bool Ragdoll::driveToPose(std::span<const figure::BodyState> target) {
     if (m_motorGains.empty() && !setMotorGains(MotorGains{0})) return false;
     const auto& constraints = figure().constraints;
     for (std::size_t ci = 0; ci < constraints.size(); ++ci) {
-        if (!hasMotor(static_cast<int>(ci))) continue;
+        if (!drivable(static_cast<int>(ci))) continue;
         const figure::FigureConstraint& c = constraints[ci];
         const figure::BodyState& s1 = target[static_cast<std::size_t>(c.body1)];
         const figure::BodyState* s2 = c.body2 >= 0 ? &target[static_cast<std::size_t>(c.body2)] : nullptr;

@@ -39,7 +39,7 @@ enum class RowRole {
     Limit,    ///< a limit of its own: cone, pyramid or hinge range (one-sided)
     Friction, ///< joint friction, bounded by the joint's reaction (docs/format.md §4.8)
     Spring,   ///< a spring's length (docs/format.md §4.7)
-    Motor,    ///< a joint motor toward a target pose (Ragdoll::setMotorGains; soft, bounded)
+    Motor,    ///< a joint motor toward a target pose (Ragdoll::setMotorGains; soft rows)
 };
 
 /// What tripped a ragdoll's explosion guard.
@@ -302,12 +302,13 @@ class Ragdoll {
     /// only (the motor's soft rows need its solver): returns false and changes nothing otherwise.
     [[nodiscard]] bool setMotorGains(const MotorGains& gains);
     /// Sets the gains of the motor of figure constraint `constraint` (per-joint strength; a frequency of 0 lets that
-    /// joint go limp). False, changing nothing, where setMotorGains(gains) would refuse, for an index out of range,
-    /// or for a constraint without a motor (hasMotor).
+    /// joint go limp). Gains and targets are kept for a joint a level of detail merges, and apply again at full
+    /// detail. False, changing nothing, where setMotorGains(gains) would refuse, for an index out of range, or for a
+    /// fixed joint or a spring.
     [[nodiscard]] bool setMotorGains(int constraint, const MotorGains& gains);
-    /// The gains of figure constraint `constraint`'s motor (frequency 0 until set).
+    /// The gains of figure constraint `constraint`'s motor (frequency 0 until set, and for a fixed joint or spring).
     MotorGains motorGains(int constraint) const;
-    /// Whether figure constraint `constraint` gets a motor (see setMotorGains).
+    /// Whether figure constraint `constraint` has a motor in the current layout (see setMotorGains).
     bool hasMotor(int constraint) const;
     /// Sets every motor's target from a pose: one state per body (body order, world body frames and velocities, as
     /// bodyStates() gives them, e.g. figure::bodiesFromJoints of an animation frame). Each motor drives its joint
@@ -375,6 +376,7 @@ class Ragdoll {
     void filterPairs();
     void addMotors(); ///< motors of every joint that has one, with their gains and targets (m_motorGains)
     bool motorsAllowed() const;
+    bool drivable(int constraint) const;          ///< the joint type has free axes (its gains and target are kept)
     void applyMotorGains(std::size_t constraint); ///< m_motorGains to its motor, in or out of the world
     void freezeBodies();                          ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
