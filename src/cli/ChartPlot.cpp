@@ -30,7 +30,7 @@ double drawn(const ChartPoint& p, ChartMetric m, double seconds) {
     return std::max(v, kFloor);
 }
 
-std::string number(double v) {
+std::string plotNumber(double v) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.6g", v);
     return buf;
@@ -59,7 +59,7 @@ std::string ticList(double lo, double hi) {
     for (int k = static_cast<int>(std::floor(std::log10(lo))); k <= static_cast<int>(std::ceil(std::log10(hi))); ++k)
         for (double m : {1.0, 2.0, 5.0}) {
             const double v = m * std::pow(10.0, k);
-            if (v >= lo && v <= hi) out += (out.empty() ? "" : ", ") + number(v);
+            if (v >= lo && v <= hi) out += (out.empty() ? "" : ", ") + plotNumber(v);
         }
     return out;
 }
@@ -92,8 +92,8 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
         data << "# " << cell(figure) << ": cost_us cost_min cost_max anchor_mm limit_deg penetration_mm settle_s "
              << "label settle_label\n";
         for (const ChartPoint& p : mine) {
-            data << number(p.costUs) << '\t' << number(p.costMinUs) << '\t' << number(p.costMaxUs);
-            for (ChartMetric m : sim::kChartMetrics) data << '\t' << number(drawn(p, m, options.seconds));
+            data << plotNumber(p.costUs) << '\t' << plotNumber(p.costMinUs) << '\t' << plotNumber(p.costMaxUs);
+            for (ChartMetric m : sim::kChartMetrics) data << '\t' << plotNumber(drawn(p, m, options.seconds));
             // Exploded methods are marked; a settle label only where the method came to rest (an empty field is
             // missing to gnuplot: no label).
             const std::string label = cell(p.label) + (p.exploded ? " ✗" : "");
@@ -103,7 +103,7 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
             const std::vector<std::size_t> front = sim::chartFront(mine, {m}); // ascending: cheapest first
             data << "\n\n# " << cell(figure) << ": front in cost and " << sim::metricTitle(m) << "\n";
             for (std::size_t i : front)
-                data << number(mine[i].costUs) << '\t' << number(drawn(mine[i], m, options.seconds)) << '\n';
+                data << plotNumber(mine[i].costUs) << '\t' << plotNumber(drawn(mine[i], m, options.seconds)) << '\n';
         }
         data << "\n\n";
     }
@@ -143,15 +143,16 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
            << "set key top right box opaque\n"
            << "set xlabel \"cost: CPU µs per awake body-step (median, bars: min–max of " << options.repeats
            << " repeats)\"\n"
-           << "set xrange [" << number(xLo / 1.5) << ":" << number(xHi * 3) << "]\n"
+           << "set xrange [" << plotNumber(xLo / 1.5) << ":" << plotNumber(xHi * 3) << "]\n"
            << "set xtics (" << ticList(xLo / 1.5, xHi * 3) << ")\n";
         int panel = 0;
         for (ChartMetric m : sim::kChartMetrics) {
             std::string ylabel(sim::metricTitle(m));
-            if (m == ChartMetric::Settle) ylabel += " (never: drawn at " + number(options.seconds) + " s)";
-            else ylabel += " (0 drawn at " + number(kFloor) + ")";
+            if (m == ChartMetric::Settle) ylabel += " (never: drawn at " + plotNumber(options.seconds) + " s)";
+            else ylabel += " (0 drawn at " + plotNumber(kFloor) + ")";
             const auto [yLo, yHi] = yRange(m);
-            gp << "set ylabel " << quoted(ylabel) << "\nset yrange [" << number(yLo) << ":" << number(yHi) << "]\n"
+            gp << "set ylabel " << quoted(ylabel) << "\nset yrange [" << plotNumber(yLo) << ":" << plotNumber(yHi)
+               << "]\n"
                << "set ytics (" << ticList(yLo, yHi) << ")\n"
                << "set title " << quoted(std::string(sim::metricTitle(m)) + " against cost; dashed: Pareto front")
                << "\nplot ";

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <numbers>
 
 #include <cairo-svg.h>
 
@@ -18,7 +19,6 @@ namespace {
 
 using Eigen::Vector2d;
 using Eigen::Vector3d;
-constexpr double kPi = 3.14159265358979323846;
 
 // Page layout, pixels (PNG) or points (SVG).
 constexpr double kMargin = 20, kTitleBand = 60, kLabelBand = 22, kPanelPad = 16, kPanelGap = 14;
@@ -147,7 +147,7 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                              cairo_line_to(cr, at.x() + 23, at.y() - 4);
                              cairo_stroke(cr);
                              for (double x : {3.0, 23.0}) {
-                                 cairo_arc(cr, at.x() + x, at.y() + (x < 10 ? 4 : -4), 2.4, 0, 2 * kPi);
+                                 cairo_arc(cr, at.x() + x, at.y() + (x < 10 ? 4 : -4), 2.4, 0, 2 * std::numbers::pi);
                                  cairo_fill(cr);
                              }
                          },
@@ -179,7 +179,7 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
                              cairo_save(cr);
                              cairo_translate(cr, at.x() + 22, at.y());
                              cairo_scale(cr, 0.35, 1);
-                             cairo_arc(cr, 0, 0, 7, 0, 2 * kPi);
+                             cairo_arc(cr, 0, 0, 7, 0, 2 * std::numbers::pi);
                              cairo_restore(cr);
                              cairo_stroke(cr);
                              cairo_set_line_width(cr, 2);
@@ -194,7 +194,7 @@ std::vector<LegendItem> legendItems(const figure::Figure& figure, const PictureR
         const double reference = heaviest > 0 ? niceLength(heaviest) : 1.0;
         const double radius = style.massPxPerSqrtKg * std::sqrt(reference);
         items.push_back({[radius](cairo_t* cr, Vector2d at) {
-                             cairo_arc(cr, at.x() + 13, at.y(), radius, 0, 2 * kPi);
+                             cairo_arc(cr, at.x() + 13, at.y(), radius, 0, 2 * std::numbers::pi);
                              cairo_set_source_rgba(cr, 0.1, 0.1, 0.1, 0.22);
                              cairo_fill_preserve(cr);
                              cairo_set_source_rgba(cr, 0.1, 0.1, 0.1, 0.7);

@@ -5,13 +5,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 namespace afb::cli {
 namespace {
 
 using Eigen::Vector2d;
 using Eigen::Vector3d;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMarkPx = 4.5; // half size of an anchor mark
 
 void setColour(cairo_t* cr, const Rgb& c, double alpha = 1.0) { cairo_set_source_rgba(cr, c.r, c.g, c.b, alpha); }
@@ -113,7 +113,7 @@ void drawSkeleton(cairo_t* cr, const figure::Figure& figure, const PictureReques
     for (std::size_t j = 1; j < n; ++j) {
         const Vector2d p = panel.toPx(request.joints[j].position);
         cairo_new_sub_path(cr);
-        cairo_arc(cr, p.x(), p.y(), 2.4, 0, 2 * kPi);
+        cairo_arc(cr, p.x(), p.y(), 2.4, 0, 2 * std::numbers::pi);
     }
     setColour(cr, colour);
     cairo_fill_preserve(cr);
@@ -131,7 +131,7 @@ void drawCone(cairo_t* cr, const PanelMapping& panel, const Vector3d& apex, cons
     std::vector<Vector2d> rim;
     constexpr int kSides = 48;
     for (int k = 0; k < kSides; ++k) {
-        const double phi = 2 * kPi * k / kSides;
+        const double phi = 2 * std::numbers::pi * k / kSides;
         rim.push_back(panel.toPx(apex + length * (std::cos(halfAngle) * axis +
                                                   std::sin(halfAngle) * (std::cos(phi) * u + std::sin(phi) * v))));
     }
@@ -171,8 +171,8 @@ void drawHingeArc(cairo_t* cr, const PanelMapping& panel, const figure::Transfor
                   double radius) {
     const Vector3d o = frame2.position, x = frame2.rotation.col(0), y = frame2.rotation.col(1);
     const Vector3d z = frame2.rotation.col(2);
-    const double span = std::min(h.upperRad - h.lowerRad, 2 * kPi);
-    const int steps = std::max(2, static_cast<int>(std::ceil(span / (kPi / 36))));
+    const double span = std::min(h.upperRad - h.lowerRad, 2 * std::numbers::pi);
+    const int steps = std::max(2, static_cast<int>(std::ceil(span / (std::numbers::pi / 36))));
     std::vector<Vector2d> sector{panel.toPx(o)};
     for (int k = 0; k <= steps; ++k) {
         const double phi = h.lowerRad + span * k / steps;
@@ -271,7 +271,7 @@ void drawMasses(cairo_t* cr, const figure::Figure& figure, const PictureRequest&
         const Vector2d p = panel.toPx(request.bodies[i].position);
         const double radius = style.massPxPerSqrtKg * std::sqrt(std::max(0.0, figure.bodies[i].massKg));
         cairo_new_sub_path(cr);
-        cairo_arc(cr, p.x(), p.y(), radius, 0, 2 * kPi);
+        cairo_arc(cr, p.x(), p.y(), radius, 0, 2 * std::numbers::pi);
         cairo_set_source_rgba(cr, 0.1, 0.1, 0.1, 0.22);
         cairo_fill_preserve(cr);
         cairo_set_source_rgba(cr, 0.1, 0.1, 0.1, 0.7);
@@ -325,10 +325,10 @@ void drawAxesGizmo(cairo_t* cr, const PanelMapping& panel) {
         Vector2d label;
         if (d.norm() < 0.1) {
             cairo_new_sub_path(cr);
-            cairo_arc(cr, o.x(), o.y(), 4.5, 0, 2 * kPi);
+            cairo_arc(cr, o.x(), o.y(), 4.5, 0, 2 * std::numbers::pi);
             cairo_stroke(cr);
             if (axis.dot(panel.axes.toViewer) > 0) {
-                cairo_arc(cr, o.x(), o.y(), 1.5, 0, 2 * kPi);
+                cairo_arc(cr, o.x(), o.y(), 1.5, 0, 2 * std::numbers::pi);
                 cairo_fill(cr);
             } else {
                 line(cr, o + Vector2d(-3, -3), o + Vector2d(3, 3));
@@ -441,7 +441,7 @@ void drawAnchorMark(cairo_t* cr, figure::JointType type, const Vector2d& at) {
     cairo_new_path(cr);
     switch (type) {
     case figure::JointType::BallAndSocket:
-    case figure::JointType::Spring: cairo_arc(cr, x, y, r, 0, 2 * kPi); break;
+    case figure::JointType::Spring: cairo_arc(cr, x, y, r, 0, 2 * std::numbers::pi); break;
     case figure::JointType::Universal:
         cairo_move_to(cr, x, y - r * 1.25);
         cairo_line_to(cr, x + r * 1.25, y);
@@ -496,7 +496,7 @@ Rgb bodyColour(std::size_t index) {
 
 void drawRootMark(cairo_t* cr, const Vector2d& at) {
     cairo_new_path(cr);
-    cairo_arc(cr, at.x(), at.y(), 4.0, 0, 2 * kPi);
+    cairo_arc(cr, at.x(), at.y(), 4.0, 0, 2 * std::numbers::pi);
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_fill_preserve(cr);
     setColour(cr, skeletonColour());

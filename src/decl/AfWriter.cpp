@@ -9,7 +9,7 @@ namespace {
 
 // Shortest text that reads back as exactly this double; a negative value is written as '-' then the number,
 // which the lexer reads back as two tokens, as the engine does.
-std::string num(double v) {
+std::string afNumber(double v) {
     if (v == 0) v = 0; // -0 and 0 read back equal; write "0"
     char buf[64];
     auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
@@ -39,7 +39,7 @@ std::string vec(const AfVector& v) {
     std::string out = v.negated ? "-" : "";
     switch (v.form) {
     case AfVector::Form::Literal:
-        return out + "( " + num(v.literal.x) + ", " + num(v.literal.y) + ", " + num(v.literal.z) + " )";
+        return out + "( " + afNumber(v.literal.x) + ", " + afNumber(v.literal.y) + ", " + afNumber(v.literal.z) + " )";
     case AfVector::Form::Joint: return out + "joint( " + inQuotes(v.joint1) + " )";
     case AfVector::Form::BoneCenter:
         return out + "bonecenter( " + inQuotes(v.joint1) + ", " + inQuotes(v.joint2) + " )";
@@ -69,7 +69,7 @@ const char* shapeName(ShapeKind k) {
 std::string shape(const AfShape& s) {
     std::string out = std::string(shapeName(s.kind)) + "( " + vec(s.v1) + ", " + vec(s.v2);
     if (s.kind == ShapeKind::Cylinder || s.kind == ShapeKind::Cone) out += ", " + std::to_string(s.numSides);
-    if (s.kind == ShapeKind::Bone) out += ", " + num(s.width);
+    if (s.kind == ShapeKind::Bone) out += ", " + afNumber(s.width);
     return out + " )";
 }
 
@@ -82,7 +82,7 @@ class Writer {
     void opt(const std::string& key, const std::optional<T>& v, F&& format) {
         if (v) line(key, format(*v));
     }
-    void optNum(const std::string& key, const std::optional<double>& v) { opt(key, v, num); }
+    void optNum(const std::string& key, const std::optional<double>& v) { opt(key, v, afNumber); }
     void optStr(const std::string& key, const std::optional<std::string>& v) { opt(key, v, inQuotes); }
     void optVec(const std::string& key, const std::optional<AfVector>& v) { opt(key, v, vec); }
     void optBool(const std::string& key, const std::optional<bool>& v) {
@@ -96,11 +96,11 @@ class Writer {
         optStr("mesh", s.mesh);
         optStr("anim", s.anim);
         opt("friction", s.friction, [](const SettingsFriction& f) {
-            return num(f.linear) + ", " + num(f.angular) + ", " + num(f.contact) +
-                   (f.constraint ? ", " + num(*f.constraint) : "");
+            return afNumber(f.linear) + ", " + afNumber(f.angular) + ", " + afNumber(f.contact) +
+                   (f.constraint ? ", " + afNumber(*f.constraint) : "");
         });
         opt("suspendSpeed", s.suspendSpeed, [](const std::array<double, 4>& v) {
-            return num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + ", " + num(v[3]);
+            return afNumber(v[0]) + ", " + afNumber(v[1]) + ", " + afNumber(v[2]) + ", " + afNumber(v[3]);
         });
         optNum("noMoveTime", s.noMoveTime);
         optNum("noMoveTranslation", s.noMoveTranslation);
@@ -124,11 +124,12 @@ class Writer {
         optNum("density", b.density);
         opt("inertiaScale", b.inertiaScale, [](const std::array<double, 9>& m) {
             std::string s = "(";
-            for (double x : m) s += " " + num(x);
+            for (double x : m) s += " " + afNumber(x);
             return s + " )";
         });
-        opt("friction", b.friction,
-            [](const BodyFriction& f) { return num(f.linear) + ", " + num(f.angular) + ", " + num(f.contact); });
+        opt("friction", b.friction, [](const BodyFriction& f) {
+            return afNumber(f.linear) + ", " + afNumber(f.angular) + ", " + afNumber(f.contact);
+        });
         opt("contents", b.contents, contents);
         opt("clipMask", b.clipMask, contents);
         optBool("selfCollision", b.selfCollision);
@@ -149,12 +150,12 @@ class Writer {
         optNum("friction", c.friction);
         if (const auto* cone = std::get_if<ConeLimit>(&c.limit))
             line("coneLimit",
-                 vec(cone->axis) + ", " + num(cone->angleDeg) + (cone->shaft ? ", " + vec(*cone->shaft) : ""));
+                 vec(cone->axis) + ", " + afNumber(cone->angleDeg) + (cone->shaft ? ", " + vec(*cone->shaft) : ""));
         if (const auto* pyr = std::get_if<PyramidLimit>(&c.limit))
-            line("pyramidLimit", vec(pyr->axis) + ", " + num(pyr->angle1Deg) + ", " + num(pyr->angle2Deg) + ", " +
-                                     num(pyr->rollDeg) + (pyr->shaft ? ", " + vec(*pyr->shaft) : ""));
+            line("pyramidLimit", vec(pyr->axis) + ", " + afNumber(pyr->angle1Deg) + ", " + afNumber(pyr->angle2Deg) +
+                                     ", " + afNumber(pyr->rollDeg) + (pyr->shaft ? ", " + vec(*pyr->shaft) : ""));
         if (const auto* h = std::get_if<HingeLimit>(&c.limit))
-            line("limit", num(h->orientationDeg) + ", " + num(h->widthDeg) + ", " + num(h->angleDeg));
+            line("limit", afNumber(h->orientationDeg) + ", " + afNumber(h->widthDeg) + ", " + afNumber(h->angleDeg));
         optNum("stretch", c.stretch);
         optNum("compress", c.compress);
         optNum("damping", c.damping);

@@ -14,14 +14,6 @@ namespace {
 using text::Token;
 using text::TokenKind;
 
-char lowerAscii(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
-
-std::string lowerCopy(std::string_view s) {
-    std::string out(s);
-    for (char& c : out) c = lowerAscii(c);
-    return out;
-}
-
 bool isDigit(char c) { return c >= '0' && c <= '9'; }
 
 // idDeclModelDef::ParseAnim: scan back from the last character while digits, but never onto the first
@@ -95,7 +87,7 @@ class DefParser {
             if (value.isPunct('{') || value.isPunct('}'))
                 m_lex.fail(value,
                            "key \"" + keyText + "\" of " + where + " has no value (found " + value.describe() + ")");
-            const auto [it, inserted] = lineOfKey.try_emplace(lowerCopy(keyText), key.line);
+            const auto [it, inserted] = lineOfKey.try_emplace(text::lowerAscii(keyText), key.line);
             if (!inserted)
                 m_lex.warn(key, "'" + keyText + "' already defined in " + where + " (line " +
                                     std::to_string(it->second) + "); the later value wins");

@@ -11,14 +11,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-char lowerAscii(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
-
-std::string lowerCopy(std::string_view s) {
-    std::string out(s);
-    for (char& c : out) c = lowerAscii(c);
-    return out;
-}
-
 bool startsWithIgnoreCase(std::string_view s, std::string_view prefix) {
     return s.size() >= prefix.size() && text::equalsIgnoreCase(s.substr(0, prefix.size()), prefix);
 }
@@ -119,7 +111,7 @@ namespace {
 template <class IndexMap, class Ref, class LocationOf>
 void addToIndex(IndexMap& index, std::string_view type, const std::string& name, const SourceLocation& location,
                 Ref ref, LocationOf&& locationOf, text::Diagnostics& diagnostics) {
-    const auto [it, inserted] = index.try_emplace(lowerCopy(name), ref);
+    const auto [it, inserted] = index.try_emplace(text::lowerAscii(name), ref);
     if (!inserted)
         diagnostics.warning(location, std::string(type) + " '" + name + "' is also defined at " +
                                           locationOf(it->second).str() + "; the first definition is used");
@@ -152,21 +144,21 @@ void Library::indexFile(const DefSource& source, std::size_t fileIndex, text::Di
 // --- lookup ---------------------------------------------------------------------------------------------
 
 std::optional<LibraryEntry<EntityDef>> Library::findEntityDef(std::string_view name) const {
-    const auto it = m_entityDefs.find(lowerCopy(name));
+    const auto it = m_entityDefs.find(text::lowerAscii(name));
     if (it == m_entityDefs.end()) return std::nullopt;
     const DefSource& source = m_defFiles[it->second.file];
     return LibraryEntry<EntityDef>{source.content.entityDefs[it->second.decl], source.path};
 }
 
 std::optional<LibraryEntry<ModelDef>> Library::findModelDef(std::string_view name) const {
-    const auto it = m_modelDefs.find(lowerCopy(name));
+    const auto it = m_modelDefs.find(text::lowerAscii(name));
     if (it == m_modelDefs.end()) return std::nullopt;
     const DefSource& source = m_defFiles[it->second.file];
     return LibraryEntry<ModelDef>{source.content.models[it->second.decl], source.path};
 }
 
 std::optional<LibraryEntry<AfDecl>> Library::findFigure(std::string_view name) const {
-    const auto it = m_figures.find(lowerCopy(name));
+    const auto it = m_figures.find(text::lowerAscii(name));
     if (it == m_figures.end()) return std::nullopt;
     const AfSource& source = m_afFiles[it->second.file];
     return LibraryEntry<AfDecl>{source.content.decls[it->second.decl], source.path};
@@ -206,7 +198,7 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::
     for (const ModelDef* current = &leaf->decl;;) {
         chain.push_back(current);
         result.chain.push_back(current->name);
-        seen.insert(lowerCopy(current->name));
+        seen.insert(text::lowerAscii(current->name));
         if (!current->inherit) break;
         const auto parent = findModelDef(*current->inherit);
         if (!parent) {
@@ -214,7 +206,7 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::
                                                      "', which is not defined");
             return std::nullopt;
         }
-        if (seen.count(lowerCopy(parent->decl.name))) {
+        if (seen.count(text::lowerAscii(parent->decl.name))) {
             std::string cycle;
             for (const std::string& n : result.chain) cycle += n + " -> ";
             diagnostics.error(current->location, "model decl inherit cycle: " + cycle + parent->decl.name);
@@ -310,7 +302,7 @@ std::vector<std::pair<std::string, std::string>> ownDict(const EntityDef& def) {
     std::vector<std::pair<std::string, std::string>> dict;
     std::map<std::string, std::size_t, std::less<>> index;
     for (const auto& [key, value] : def.keyValues) {
-        const auto [it, inserted] = index.try_emplace(lowerCopy(key), dict.size());
+        const auto [it, inserted] = index.try_emplace(text::lowerAscii(key), dict.size());
         if (inserted) dict.emplace_back(key, value);
         else dict[it->second].second = value;
     }
@@ -344,14 +336,14 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::
     std::set<std::string, std::less<>> visited, onPath;
     std::map<std::string, std::size_t, std::less<>> keyIndex;
     const auto visit = [&](const EntityDef& def) {
-        visited.insert(lowerCopy(def.name));
-        onPath.insert(lowerCopy(def.name));
+        visited.insert(text::lowerAscii(def.name));
+        onPath.insert(text::lowerAscii(def.name));
         r.entityChain.push_back(def.name);
         EntityFrame frame{&def, {}, 0};
         for (auto& [key, value] : ownDict(def)) {
             if (startsWithIgnoreCase(key, "inherit")) {
                 frame.parents.push_back(value);
-            } else if (keyIndex.try_emplace(lowerCopy(key), r.keyValues.size()).second) {
+            } else if (keyIndex.try_emplace(text::lowerAscii(key), r.keyValues.size()).second) {
                 r.keyValues.emplace_back(key, value);
             }
         }
@@ -361,7 +353,7 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::
     while (!stack.empty()) {
         EntityFrame& top = stack.back();
         if (top.next == top.parents.size()) {
-            onPath.erase(lowerCopy(top.def->name));
+            onPath.erase(text::lowerAscii(top.def->name));
             stack.pop_back();
             continue;
         }
@@ -372,12 +364,12 @@ bool Library::mergeEntityKeys(const EntityDef& entity, ResolvedEntity& r, text::
                               "entityDef '" + top.def->name + "' inherits '" + parentName + "', which is not defined");
             return false;
         }
-        const std::string key = lowerCopy(parent->decl.name);
+        const std::string key = text::lowerAscii(parent->decl.name);
         if (onPath.count(key)) {
             std::string cycle;
             bool inCycle = false;
             for (const EntityFrame& f : stack) {
-                inCycle = inCycle || lowerCopy(f.def->name) == key;
+                inCycle = inCycle || text::lowerAscii(f.def->name) == key;
                 if (inCycle) cycle += f.def->name + " -> ";
             }
             diagnostics.error(top.def->location, "entityDef inherit cycle: " + cycle + parent->decl.name);

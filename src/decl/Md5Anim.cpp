@@ -17,12 +17,10 @@ using text::Lexer;
 using text::Token;
 using text::TokenKind;
 
-constexpr std::int64_t kMd5Version = 10;
-
 // The shortest text each entry can be written in. A count larger than the rest of the input could hold is
 // rejected before anything is allocated, so a file claiming two billion frames costs nothing.
-constexpr std::size_t kMinJointBytes = 21; // `""0 0 0` in hierarchy plus `(0 0 0)(0 0 0)` in baseframe
-constexpr std::size_t kMinFrameBytes = 23; // `(0 0 0)(0 0 0)` in bounds plus `frame 0{}`; values add 2 each
+constexpr std::size_t kMinAnimJointBytes = 21; // `""0 0 0` in hierarchy plus `(0 0 0)(0 0 0)` in baseframe
+constexpr std::size_t kMinFrameBytes = 23;     // `(0 0 0)(0 0 0)` in bounds plus `frame 0{}`; values add 2 each
 
 using detail::quotedName;
 using detail::reserveFor;
@@ -38,7 +36,7 @@ class AnimParser : detail::Md5ParserBase {
         if (m_lex.atEnd()) m_lex.fail(m_lex.peek(), "empty md5anim file: expected 'MD5Version 10'");
         expectKeyword("MD5Version", "at the start of an md5anim file");
         const Token versionToken = m_lex.peek();
-        if (m_lex.parseInt("MD5Version") != kMd5Version)
+        if (m_lex.parseInt("MD5Version") != detail::kMd5Version)
             m_lex.fail(versionToken, "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
         expectKeyword("commandline", "after MD5Version");
         anim.commandline = m_lex.expectString("the commandline");
@@ -50,7 +48,7 @@ class AnimParser : detail::Md5ParserBase {
 
         expectKeyword("numJoints", "after numFrames");
         const Token jointsToken = m_lex.peek();
-        const int numJoints = parseSizedCount("numJoints", kMinJointBytes);
+        const int numJoints = parseSizedCount("numJoints", kMinAnimJointBytes);
         if (numJoints == 0) m_lex.fail(jointsToken, "numJoints 0: an md5anim needs at least one joint");
 
         expectKeyword("frameRate", "after numJoints");

@@ -16,6 +16,9 @@ namespace afb::decl::detail {
 /// A count is only known to fit the input; reserve at most this many entries up front, so that memory follows
 /// the entries actually read rather than the claim.
 inline constexpr std::size_t kMaxReserve = 4096;
+
+/// The only `MD5Version` the engine reads.
+inline constexpr std::int64_t kMd5Version = 10;
 inline std::size_t reserveFor(int count) { return std::min(static_cast<std::size_t>(count), kMaxReserve); }
 
 inline std::string quotedName(std::string_view s) { return "\"" + std::string(s.substr(0, 60)) + "\""; }

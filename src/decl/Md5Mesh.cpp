@@ -16,15 +16,13 @@ using text::Lexer;
 using text::Token;
 using text::TokenKind;
 
-constexpr std::int64_t kMd5Version = 10;
-
 // The shortest text each entry can be written in. A count larger than the rest of the input could hold is
 // rejected before anything is allocated, so a file claiming two billion joints costs nothing.
-constexpr std::size_t kMinJointBytes = 17;  // `""0(0 0 0)(0 0 0)`
-constexpr std::size_t kMinMeshBytes = 48;   // `mesh{shader""numverts 0 numtris 0 numweights 0}`
-constexpr std::size_t kMinVertBytes = 14;   // `vert 0(0 0)0 1`
-constexpr std::size_t kMinTriBytes = 11;    // `tri 0 0 0 0`
-constexpr std::size_t kMinWeightBytes = 19; // `weight 0 0 0(0 0 0)`
+constexpr std::size_t kMinMeshJointBytes = 17; // `""0(0 0 0)(0 0 0)`
+constexpr std::size_t kMinMeshBytes = 48;      // `mesh{shader""numverts 0 numtris 0 numweights 0}`
+constexpr std::size_t kMinVertBytes = 14;      // `vert 0(0 0)0 1`
+constexpr std::size_t kMinTriBytes = 11;       // `tri 0 0 0 0`
+constexpr std::size_t kMinWeightBytes = 19;    // `weight 0 0 0(0 0 0)`
 
 using detail::quotedName;
 using detail::reserveFor;
@@ -41,12 +39,12 @@ class MeshParser : detail::Md5ParserBase {
         if (m_lex.atEnd()) m_lex.fail(m_lex.peek(), "empty md5mesh file: expected 'MD5Version 10'");
         expectKeyword("MD5Version", "at the start of an md5mesh file");
         const Token versionToken = m_lex.peek();
-        if (m_lex.parseInt("MD5Version") != kMd5Version)
+        if (m_lex.parseInt("MD5Version") != detail::kMd5Version)
             m_lex.fail(versionToken, "MD5Version " + std::string(versionToken.text) + " is not supported (only 10)");
         expectKeyword("commandline", "after MD5Version");
         mesh.commandline = m_lex.expectString("the commandline");
         expectKeyword("numJoints", "after commandline");
-        const int numJoints = parseSizedCount("numJoints", kMinJointBytes);
+        const int numJoints = parseSizedCount("numJoints", kMinMeshJointBytes);
         expectKeyword("numMeshes", "after numJoints");
         const int numMeshes = parseSizedCount("numMeshes", kMinMeshBytes);
 

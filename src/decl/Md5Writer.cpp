@@ -17,7 +17,7 @@ namespace {
 // that is what md5 exporters write; a value rounded to d decimals therefore prints with at most d decimals
 // and no trailing zeros. A negative value is written as '-' then the number, which the lexer reads back as
 // two tokens, as the engine does.
-std::string num(double v) {
+std::string md5Number(double v) {
     if (v == 0) v = 0; // -0 and 0 read back equal; write "0"
     char buf[512];     // DBL_MAX in fixed form is 309 digits
     auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed);
@@ -29,7 +29,7 @@ std::string num(double v) {
     return std::string(buf, end);
 }
 
-std::string vec(const Vec3& v) { return "( " + num(v.x) + " " + num(v.y) + " " + num(v.z) + " )"; }
+std::string vec(const Vec3& v) { return "( " + md5Number(v.x) + " " + md5Number(v.y) + " " + md5Number(v.z) + " )"; }
 
 // md5 strings have no escapes: a quote or a line break cannot be written inside one.
 std::string quoted(const std::string& s, const char* what) {
@@ -50,7 +50,7 @@ void writeSubMesh(std::string& out, const Md5SubMesh& m) {
     out += "\tnumverts " + std::to_string(m.verts.size()) + "\n";
     for (std::size_t i = 0; i < m.verts.size(); ++i) {
         const Md5Vert& v = m.verts[i];
-        out += "\tvert " + std::to_string(i) + " ( " + num(v.s) + " " + num(v.t) + " ) " +
+        out += "\tvert " + std::to_string(i) + " ( " + md5Number(v.s) + " " + md5Number(v.t) + " ) " +
                std::to_string(v.firstWeight) + " " + std::to_string(v.weightCount) + "\n";
     }
     out += "\n\tnumtris " + std::to_string(m.tris.size()) + "\n";
@@ -62,7 +62,7 @@ void writeSubMesh(std::string& out, const Md5SubMesh& m) {
     out += "\n\tnumweights " + std::to_string(m.weights.size()) + "\n";
     for (std::size_t i = 0; i < m.weights.size(); ++i) {
         const Md5Weight& w = m.weights[i];
-        out += "\tweight " + std::to_string(i) + " " + std::to_string(w.joint) + " " + num(w.bias) + " " +
+        out += "\tweight " + std::to_string(i) + " " + std::to_string(w.joint) + " " + md5Number(w.bias) + " " +
                vec(w.offset) + "\n";
     }
     out += "}\n";
@@ -76,7 +76,7 @@ void writeFrame(std::string& out, std::size_t index, const std::vector<double>& 
     for (std::size_t i = 0; i < values.size(); ++i) {
         if (lineStarts[i]) out += (i == 0 ? "\t" : "\n\t");
         else out += " ";
-        out += num(values[i]);
+        out += md5Number(values[i]);
     }
     if (!values.empty()) out += "\n";
     out += "}\n";

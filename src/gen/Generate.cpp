@@ -10,6 +10,7 @@
 #include "Fit.h"
 #include "afb/decl/AfParser.h"
 #include "afb/detail/DoomMath.h"
+#include "afb/detail/Lexer.h"
 #include "afb/figure/Collision.h"
 #include "afb/figure/Figure.h"
 #include "afb/figure/Skeleton.h"
@@ -18,7 +19,6 @@ namespace afb::gen {
 namespace {
 
 using detail::BodyFit;
-constexpr double kMetresPerUnit = 0.0254;
 constexpr double kDeg = M_PI / 180.0;
 
 double rnd(double v, int decimals = 4) {
@@ -37,18 +37,13 @@ decl::Vec3 vec(const Eigen::Vector3d& v, int decimals = 4) {
 }
 decl::AfVector lit(const Eigen::Vector3d& v, int decimals = 4) { return decl::AfVector::fromLiteral(vec(v, decimals)); }
 
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
 // A body or constraint name: the joint's, unique ignoring case, never "origin" or "world" (docs/format.md §1.4).
 std::string uniqueName(const std::string& wanted, std::set<std::string>& taken) {
     std::string base = wanted.empty() ? "body" : wanted;
-    if (lower(base) == "origin" || lower(base) == "world") base += "_body";
+    if (text::lowerAscii(base) == "origin" || text::lowerAscii(base) == "world") base += "_body";
     std::string name = base;
-    for (int k = 2; taken.count(lower(name)); ++k) name = base + "_" + std::to_string(k);
-    taken.insert(lower(name));
+    for (int k = 2; taken.count(text::lowerAscii(name)); ++k) name = base + "_" + std::to_string(k);
+    taken.insert(text::lowerAscii(name));
     return name;
 }
 
@@ -201,7 +196,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     const Eigen::Vector3d forward = forwardOf(rig, options.rules);
     double totalVolume = 0;
     for (const BodyFit& b : fits) totalVolume += b.volume;
-    const double volumeM3 = totalVolume * std::pow(kMetresPerUnit, 3);
+    const double volumeM3 = totalVolume * std::pow(kMetresPerDoomUnit, 3);
     const double mass = options.massKg.value_or(rnd(options.rules.densityKgM3 * volumeM3, 1));
     if (!(mass > 0) || !(totalVolume > 0)) {
         diagnostics.error(where, "the bodies have no volume or the mass is not positive");

@@ -15,6 +15,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include "afb/detail/Lexer.h"
 #include "afb/gen/Rig.h"
 
 // Debian's assimp is built with its internal asserts on (ASSIMP_BUILD_DEBUG), and its handler aborts the process:
@@ -35,18 +36,12 @@ void aiAssertViolation(const char* failedExpression, const char* file, int line)
 namespace afb::gen {
 namespace {
 
-constexpr double kMetresPerDoomUnit = 0.0254;
 constexpr int kMaxNodeDepth = 1024;
 constexpr std::size_t kMaxNodes = 1u << 20;
 
 struct ImportError {
     std::string message;
 };
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 Eigen::Matrix4d toEigen(const aiMatrix4x4& m) {
     Eigen::Matrix4d e;
@@ -73,8 +68,8 @@ std::string md5Name(std::string name, std::set<std::string>& taken) {
         if (c == '"' || c == '\n' || c == '\r' || c == '\0' || static_cast<unsigned char>(c) < 0x20) c = '_';
     if (name.empty()) name = "joint";
     std::string unique = name;
-    for (int k = 2; taken.count(lower(unique)); ++k) unique = name + "_" + std::to_string(k);
-    taken.insert(lower(unique));
+    for (int k = 2; taken.count(text::lowerAscii(unique)); ++k) unique = name + "_" + std::to_string(k);
+    taken.insert(text::lowerAscii(unique));
     return unique;
 }
 
@@ -214,7 +209,7 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
     for (const auto& p : paths) inSkeleton.insert(p.begin() + static_cast<std::ptrdiff_t>(common - 1), p.end());
 
     // Unit and axes: Doom units, Z up, X forward (assimp's Y up, Z forward → Doom's Z up, X forward).
-    const std::string ext = lower(extension);
+    const std::string ext = text::lowerAscii(extension);
     double metres = ext == "gltf" || ext == "glb" ? 1.0
                     : ext == "fbx"                ? 0.01 * metaDouble(scene, "UnitScaleFactor").value_or(1.0)
                                                   : kMetresPerDoomUnit;
@@ -225,7 +220,7 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
     Rig rig;
     std::set<std::string> taken;
     std::map<int, int> jointOfNode;
-    const bool topIsOrigin = lower(nodes[static_cast<std::size_t>(top)].node->mName.C_Str()) == "origin";
+    const bool topIsOrigin = text::lowerAscii(nodes[static_cast<std::size_t>(top)].node->mName.C_Str()) == "origin";
     if (!topIsOrigin) rig.joints.push_back({md5Name("origin", taken), -1, {}});
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         const int n = static_cast<int>(i);
@@ -352,7 +347,7 @@ unsigned assimpPostProcessSteps() {
 
 std::optional<Rig> importRig(const std::filesystem::path& path, const ImportOptions& options,
                              text::Diagnostics& diagnostics) {
-    std::string ext = lower(path.extension().string());
+    std::string ext = text::lowerAscii(path.extension().string());
     if (!ext.empty()) ext.erase(0, 1);
     if (ext == "md5mesh") {
         auto mesh = decl::loadMd5Mesh(path, diagnostics);

@@ -18,7 +18,6 @@ bool namesEqualIgnoringCase(const std::string& a, const std::string& b) {
            });
 }
 
-constexpr double kMetresPerDoomUnit = 0.0254;
 constexpr double kMaxModelM = 100;
 
 // The largest extent of the mesh's joints and bind-pose vertices, in its own units.

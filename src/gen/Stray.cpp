@@ -10,7 +10,6 @@
 namespace afb::gen {
 namespace {
 
-constexpr double kMetresPerUnit = 0.0254;
 constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median
 constexpr double kMadToSigma = 1.4826;      // the median absolute deviation of a normal distribution, in σ
 // A vertex this close to its bone's median distance, as a fraction of the model's height, is never stray: a bone
@@ -62,8 +61,8 @@ void markFar(const std::vector<Sample>& samples, double factor, double height, s
     const double spread = std::max(kMadToSigma * median(deviation), m / 2);
     const double limit = m + std::max(factor * spread, kMinStrayFraction * height);
     report.boneVertices = static_cast<int>(samples.size());
-    report.medianM = m * kMetresPerUnit;
-    report.limitM = limit * kMetresPerUnit;
+    report.medianM = m * kMetresPerDoomUnit;
+    report.limitM = limit * kMetresPerDoomUnit;
     double nearest = INFINITY, farthest = 0;
     for (const Sample& s : samples)
         if (s.distance > limit) {
@@ -73,8 +72,8 @@ void markFar(const std::vector<Sample>& samples, double factor, double height, s
             farthest = std::max(farthest, s.distance);
         }
     if (report.vertices > 0) {
-        report.nearestM = nearest * kMetresPerUnit;
-        report.farthestM = farthest * kMetresPerUnit;
+        report.nearestM = nearest * kMetresPerDoomUnit;
+        report.farthestM = farthest * kMetresPerDoomUnit;
     }
 }
 

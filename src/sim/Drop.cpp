@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <thread>
@@ -25,7 +26,6 @@ namespace {
 
 using bullet::Ragdoll;
 using bullet::RagdollAsset;
-constexpr double kPi = 3.14159265358979323846;
 
 // Model-space bounds of a figure's bodies at the load pose, for spacing and spawn height.
 void figureBounds(const figure::Figure& f, const btMatrix3x3& rotation, btVector3& lo, btVector3& hi) {
@@ -185,7 +185,8 @@ Partial measure(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, c
                     if (e.limitExcessRad > 0) out.r.worstLimitJoint = name;
                 }
                 out.r.maxAnchorErrorM = std::max(out.r.maxAnchorErrorM, e.anchorM);
-                out.r.maxLimitViolationDeg = std::max(out.r.maxLimitViolationDeg, e.limitExcessRad * 180.0 / kPi);
+                out.r.maxLimitViolationDeg =
+                    std::max(out.r.maxLimitViolationDeg, e.limitExcessRad * 180.0 / std::numbers::pi);
                 if (e.anchorM > kExplodeAnchorM && !out.r.exploded) {
                     out.r.exploded = true;
                     out.r.explodedAtS = now;
@@ -255,11 +256,11 @@ std::vector<std::vector<btTransform>> spawnGrid(const figure::Figure& figure, co
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
     std::vector<std::vector<btTransform>> perWorld(static_cast<std::size_t>(worlds));
     for (int i = 0; i < count; ++i) {
-        double yaw = 37.0 * i * kPi / 180.0, tilt = 0, tiltDir = 0;
+        double yaw = 37.0 * i * std::numbers::pi / 180.0, tilt = 0, tiltDir = 0;
         if (o.seed) {
-            yaw = unit(rng) * 2 * kPi;
-            tilt = unit(rng) * kPi / 2;
-            tiltDir = unit(rng) * 2 * kPi;
+            yaw = unit(rng) * 2 * std::numbers::pi;
+            tilt = unit(rng) * std::numbers::pi / 2;
+            tiltDir = unit(rng) * 2 * std::numbers::pi;
         }
         btQuaternion q(btVector3(0, 0, 1), btScalar(yaw));
         if (tilt > 0)

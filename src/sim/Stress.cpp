@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numbers>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -22,8 +23,6 @@
 
 namespace afb::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string fixed(double v, int digits) {
     char buf[64];
@@ -122,14 +121,15 @@ template <class Doll>
 bool stillSince(const std::vector<std::unique_ptr<Doll>>& dolls, const std::vector<btTransform>& window,
                 const StressThresholds& th) {
     std::size_t n = 0;
-    const double turn = th.restTurnDeg * kPi / 180;
+    const double turn = th.restTurnDeg * std::numbers::pi / 180;
     for (const auto& d : dolls)
         for (const figure::Transform& t : d->bodyTransforms()) {
             const btTransform now = bullet::toBt(t);
             const btTransform& then = window[n++];
             if ((now.getOrigin() - then.getOrigin()).length() > th.restMoveM) return false;
             const btQuaternion dq = then.getRotation().inverse() * now.getRotation();
-            if (static_cast<double>(dq.getAngle()) > turn && 2 * kPi - static_cast<double>(dq.getAngle()) > turn)
+            if (static_cast<double>(dq.getAngle()) > turn &&
+                2 * std::numbers::pi - static_cast<double>(dq.getAngle()) > turn)
                 return false;
         }
     return true;
@@ -214,7 +214,7 @@ void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, con
                 const bullet::JointError e = d.jointError(c);
                 const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
                 const std::string label = dolls.size() > 1 ? "#" + std::to_string(k) + " " + name : name;
-                const double limitDeg = e.limitExcessRad * 180.0 / kPi;
+                const double limitDeg = e.limitExcessRad * 180.0 / std::numbers::pi;
                 r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, e.anchorM);
                 r.maxLimitOvershootDeg = std::max(r.maxLimitOvershootDeg, limitDeg);
                 if (e.anchorM > th.maxAnchorErrorM)
@@ -371,8 +371,8 @@ StressSetup yawedSetup(const StressSetup& setup, double yawDeg) {
         c = kCos[q];
         s = kSin[q];
     } else {
-        c = std::cos(yawDeg * kPi / 180);
-        s = std::sin(yawDeg * kPi / 180);
+        c = std::cos(yawDeg * std::numbers::pi / 180);
+        s = std::sin(yawDeg * std::numbers::pi / 180);
     }
     Eigen::Matrix3d rz;
     rz << c, -s, 0, s, c, 0, 0, 0, 1;

@@ -2,6 +2,7 @@
 // one figure builder, findings and all), and spawns of the bundled humanoid.
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -15,7 +16,6 @@
 namespace afb::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMetresPerUnit = 0.0254; // the default UnitSystem: .af numbers are Doom units
 
 // A Doom-unit number as the lexer reads it: fixed notation (no exponent), never a leading-zero integer.
@@ -156,7 +156,7 @@ figure::Figure overlapFigure() {
 }
 
 Eigen::Matrix3d rotation(const Eigen::Vector3d& axis, double deg) {
-    return Eigen::AngleAxisd(deg * kPi / 180, axis.normalized()).toRotationMatrix();
+    return Eigen::AngleAxisd(deg * std::numbers::pi / 180, axis.normalized()).toRotationMatrix();
 }
 
 // The lowest point of `f`'s bodies when turned by `r`, model-space z.
@@ -284,7 +284,7 @@ std::vector<StressScenario> makeScenarios() {
                        // Shift each hinge range so the load pose (φ = 0) lies 20° below its lower end.
                        for (figure::FigureConstraint& k : f.constraints)
                            if (auto* r = std::get_if<figure::HingeRange>(&k.limit)) {
-                               const double shift = 20 * kPi / 180 - r->lowerRad;
+                               const double shift = 20 * std::numbers::pi / 180 - r->lowerRad;
                                r->lowerRad += shift;
                                r->upperRad += shift;
                            }

@@ -28,6 +28,12 @@ bool equalsIgnoreCase(std::string_view a, std::string_view b) {
     return true;
 }
 
+std::string lowerAscii(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = lower(c);
+    return out;
+}
+
 bool Token::isNameI(std::string_view s) const { return kind == TokenKind::Name && equalsIgnoreCase(text, s); }
 
 std::string Token::describe() const {

@@ -42,6 +42,8 @@ struct Token {
 
 /// ASCII case-insensitive equality (idStr::Icmp == 0).
 bool equalsIgnoreCase(std::string_view a, std::string_view b);
+/// `s` with A–Z lowered (ASCII only, as the engine compares names).
+std::string lowerAscii(std::string_view s);
 
 /// Thrown by the lexer and by parsers built on it; caught at each parser's entry point and turned into a
 /// Diagnostic. Never escapes the library.

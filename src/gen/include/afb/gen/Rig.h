@@ -19,6 +19,9 @@
 
 namespace afb::gen {
 
+/// Metres per Doom unit (one inch): the unit md5 and .af numbers are in.
+inline constexpr double kMetresPerDoomUnit = 0.0254;
+
 /// One joint of the bind pose.
 struct RigJoint {
     std::string name;       ///< unique ignoring ASCII case, no quote or line break (md5 strings)
