@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 7> kPresetNames = {"fast",  "iterative", "default",  "accurate",
                                                           "exact", "legacy",    "multibody"};
 
-const std::array<MethodKnob, 30> kKnobs = {{
+const std::array<MethodKnob, 31> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"impact-substeps",
@@ -74,6 +74,9 @@ const std::array<MethodKnob, 30> kKnobs = {{
     {"friction-through-figure",
      "Contact friction moves the whole ragdoll as its joints let it, not one body (on/off; needs direct-joints)",
      &Method::frictionThroughFigure},
+    {"separated-pairs",
+     "Convex pairs apart along the line between their centres skip GJK: the same contacts, cheaper (on/off)",
+     &Method::separatedPairs},
 }};
 
 // Bounds that keep a method simulable (a solver with 10^6 iterations or an ERP of 5 is a typo, not a method).
@@ -161,6 +164,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.exemptOverlapping = false;
         m.constantVelocityUniversal = false;
         m.impactSubsteps = 1;
+        m.separatedPairs = false;
         return m;
     }
     if (name == "iterative") {

@@ -14,6 +14,7 @@
 #include "HullPlaneCollision.h"
 #include "PositionPass.h"
 #include "RagdollWorldLink.h"
+#include "SeparatedPairs.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/detail/Constraints.h"
@@ -130,6 +131,8 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
             detail::useVertexHullPlaneContacts(*dispatcher, m.multipointContacts, *config);
             // Boxes against boxes: speculative points while apart (Bullet's detector reports overlap only).
             detail::useSpeculativeBoxBoxContacts(*dispatcher, m.speculativeContacts, *config);
+            // Convex pairs plainly apart skip GJK: the same contacts, found cheaper.
+            detail::useSeparatedPairSkip(*dispatcher, m.separatedPairs, *config);
         }
 }
 

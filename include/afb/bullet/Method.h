@@ -190,6 +190,10 @@ struct Method {
     /// takes back. Through the figure the solve converges and figures come to rest sooner, for more work per awake
     /// body-step. Off in every preset (docs/methods.md, docs/performance.md).
     bool frictionThroughFigure = false;
+    /// Convex pairs whose bounding boxes overlap but whose shapes are apart along the line between their centres
+    /// (by more than the manifold keeps points at) skip Bullet's GJK: the contacts are the same bit for bit, found
+    /// for less (docs/performance.md). On in every preset but legacy; plain Bullet has no such test.
+    bool separatedPairs = true;
 
     /// Equal when the name and every knob are.
     friend bool operator==(const Method&, const Method&) = default;
