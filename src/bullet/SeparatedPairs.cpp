@@ -1,7 +1,7 @@
 // Convex pairs that are plainly apart skip the narrow phase (SeparatedPairs.h).
 #include "SeparatedPairs.h"
 
-#include <tuple>
+#include <utility>
 
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 
@@ -59,13 +59,18 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
     const btPersistentManifold* m_manifold = nullptr; // the inner algorithm's, once it has run
 };
 
+// Stateless, so one object serves every world: Bullet's algorithm comes from the creating dispatcher's own
+// configuration (the world being built), for the pair's shape types.
 struct CreateSeparatedPair : btCollisionAlgorithmCreateFunc {
-    btCollisionAlgorithmCreateFunc* inner = nullptr;
     btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
                                                    const btCollisionObjectWrapper* w0,
                                                    const btCollisionObjectWrapper* w1) override {
-        btCollisionAlgorithm* wrapped = inner->CreateCollisionAlgorithm(ci, w0, w1);
-        void* memory = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(SeparatedPairAlgorithm));
+        auto* dispatcher = static_cast<btCollisionDispatcher*>(ci.m_dispatcher1);
+        btCollisionAlgorithmCreateFunc* bullet =
+            dispatcher->getCollisionConfiguration()->getCollisionAlgorithmCreateFunc(
+                w0->getCollisionShape()->getShapeType(), w1->getCollisionShape()->getShapeType());
+        btCollisionAlgorithm* wrapped = bullet->CreateCollisionAlgorithm(ci, w0, w1);
+        void* memory = dispatcher->allocateCollisionAlgorithm(sizeof(SeparatedPairAlgorithm));
         return new (memory) SeparatedPairAlgorithm(ci, wrapped);
     }
 };
@@ -73,13 +78,10 @@ struct CreateSeparatedPair : btCollisionAlgorithmCreateFunc {
 } // namespace
 
 void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config) {
+    static CreateSeparatedPair create;
     constexpr int kHull = CONVEX_HULL_SHAPE_PROXYTYPE, kBox = BOX_SHAPE_PROXYTYPE;
-    static CreateSeparatedPair hullHull, hullBox, boxHull;
-    for (auto [create, t0, t1] :
-         {std::tuple{&hullHull, kHull, kHull}, {&hullBox, kHull, kBox}, {&boxHull, kBox, kHull}}) {
-        create->inner = config.getCollisionAlgorithmCreateFunc(t0, t1);
-        dispatcher.registerCollisionCreateFunc(t0, t1, on ? create : create->inner);
-    }
+    for (auto [t0, t1] : {std::pair{kHull, kHull}, {kHull, kBox}, {kBox, kHull}})
+        dispatcher.registerCollisionCreateFunc(t0, t1, on ? &create : config.getCollisionAlgorithmCreateFunc(t0, t1));
 }
 
 } // namespace afb::bullet::detail

@@ -5,13 +5,14 @@
 // bodies' centres: when the gap along it, measured from the shapes' support points (margins included), is wider
 // than the farthest a contact could be reported at, Bullet's algorithm would add no point, so it is not run. The
 // result is the same contacts, bit for bit; otherwise Bullet's convex–convex algorithm runs as before
-// (docs/performance.md, the narrow phase).
+// (docs/performance.md, separated pairs).
 #include <btBulletCollisionCommon.h>
 
 namespace afb::bullet::detail {
 
 /// Installs the separating-axis test in front of Bullet's convex–convex algorithm for hull–hull, hull–box and
-/// box–hull pairs, or restores Bullet's default from `config`. The create functions are process-lifetime objects.
+/// box–hull pairs, or restores Bullet's default from `config`. The create function is a stateless process-lifetime
+/// object: Bullet's algorithm behind it comes from the configuration of the dispatcher that creates the pair.
 void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config);
 
 } // namespace afb::bullet::detail
