@@ -34,6 +34,7 @@ class Ragdoll::Action : public btActionInterface {
     std::optional<GuardTrip> lastTrip;
 
     void updateAction(btCollisionWorld* world, btScalar dt) override {
+        if (m_owner.m_regainPerSecond > 0) m_owner.regainStrength(double(dt));
         if (!atRest && guard.enabled) {
             if (auto trip = check()) {
                 restore(*world);

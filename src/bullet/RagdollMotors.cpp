@@ -1,4 +1,5 @@
 // Joint motors of the rigid backend (Ragdoll::setMotorGains, Ragdoll::driveToPose; docs/motors.md).
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -33,6 +34,21 @@ bool finite(const figure::BodyState& s) {
 }
 
 } // namespace
+
+MotorGains scaledGains(const MotorGains& gains, double strength) {
+    if (strength >= 1) return gains;
+    MotorGains out = gains;
+    if (!(strength > 0)) {
+        out.frequencyHz = 0;
+        return out;
+    }
+    const double root = std::sqrt(strength);
+    out.frequencyHz *= root;
+    out.dampingRatio *= root;
+    out.maxTorqueNm *= strength;
+    out.maxForceN *= strength;
+    return out;
+}
 
 bool Ragdoll::motorsAllowed() const {
     return !m_multibody && m_manager != nullptr &&
@@ -80,7 +96,7 @@ void Ragdoll::applyMotorGains(std::size_t ci) {
     JointMotorConstraint* motor = m_motors[ci];
     if (!motor) return;
     const bool was = motor->active();
-    motor->setGains(m_motorGains[ci]);
+    motor->setGains(scaledGains(m_motorGains[ci], m_motorStrength));
     if (m_frozen || was == motor->active()) return;
     if (motor->active()) m_world.addConstraint(motor);
     else m_world.removeConstraint(motor);
@@ -93,6 +109,34 @@ bool Ragdoll::setMotorGains(int constraint, const MotorGains& gains) {
     m_motorGains[ci] = gains;
     applyMotorGains(ci);
     return true;
+}
+
+bool Ragdoll::setMotorStrength(double strength) {
+    if (!motorsAllowed() || !(strength >= 0 && strength <= 1)) return false;
+    m_regainPerSecond = 0;
+    m_motorStrength = strength;
+    for (std::size_t ci = 0; ci < m_motorGains.size(); ++ci) applyMotorGains(ci);
+    return true;
+}
+
+bool Ragdoll::hit(int body, const btVector3& impulse, const btVector3& worldPoint, const HitReaction& reaction) {
+    const bool finiteHit = std::isfinite(double(impulse.length2())) && std::isfinite(double(worldPoint.length2()));
+    if (body < 0 || body >= bodyCount() || !finiteHit || !(reaction.strength >= 0 && reaction.strength <= 1) ||
+        !(reaction.regainSeconds >= 0 && std::isfinite(reaction.regainSeconds)))
+        return false;
+    if (!applyBodyImpulse(body, impulse, worldPoint, ImpulseRule::Always)) return false;
+    if (m_motorGains.empty() || reaction.regainSeconds == 0 || reaction.strength >= m_motorStrength) return true;
+    m_motorStrength = reaction.strength;
+    m_regainPerSecond = (1 - reaction.strength) / reaction.regainSeconds;
+    for (std::size_t ci = 0; ci < m_motorGains.size(); ++ci) applyMotorGains(ci);
+    return true;
+}
+
+// After each substep while a hit's strength comes back: linear in simulated time, exactly 1 at the end.
+void Ragdoll::regainStrength(double dt) {
+    m_motorStrength = std::min(1.0, m_motorStrength + m_regainPerSecond * dt);
+    if (m_motorStrength >= 1) m_regainPerSecond = 0;
+    for (std::size_t ci = 0; ci < m_motorGains.size(); ++ci) applyMotorGains(ci);
 }
 
 bool Ragdoll::driveToPose(std::span<const figure::BodyState> target) {
@@ -143,7 +187,7 @@ void Ragdoll::addMotors() {
         auto* motor = m_arena->make<JointMotorConstraint>(body(c.body1), other(c.body2), m_rigidFrames[ci].first,
                                                           m_rigidFrames[ci].second, *axes);
         const MotorTarget& t = m_motorTargets[ci];
-        motor->setGains(m_motorGains[ci]);
+        motor->setGains(scaledGains(m_motorGains[ci], m_motorStrength));
         motor->setRotationTarget(t.rotation, t.angularVelocity);
         motor->setSlideTarget(t.offset, t.speed);
         m_motors[ci] = motor;

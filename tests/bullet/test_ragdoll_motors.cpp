@@ -9,61 +9,18 @@
 #include <vector>
 
 #include "EntityFixture.h"
+#include "MotorPoses.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/figure/Lod.h"
 #include "afb/sim/Scene.h"
 
 using namespace afb;
+using test::restingPose;
+using test::worstMotorError;
 
 namespace {
 
 constexpr double kDt = 1.0 / 60;
-
-// Frame B's rotation in frame A of every constraint, now.
-std::vector<btQuaternion> relativeRotations(const bullet::Ragdoll& r) {
-    std::vector<btQuaternion> out;
-    for (std::size_t i = 0; i < r.figure().constraints.size(); ++i) {
-        const auto [a, b] = r.constraintFramesWorld(static_cast<int>(i));
-        btQuaternion q;
-        (a.getBasis().transpose() * b.getBasis()).getRotation(q);
-        out.push_back(q);
-    }
-    return out;
-}
-
-double angleBetween(const btQuaternion& a, const btQuaternion& b) {
-    const double d = std::abs(double(a.dot(b)));
-    return 2 * std::acos(std::min(1.0, d));
-}
-
-bullet::SpawnOptions at(double heightM) {
-    bullet::SpawnOptions where;
-    where.entityTransform =
-        btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.6)), btVector3(0, 0, btScalar(heightM)));
-    where.comeToRest = false;
-    return where;
-}
-
-// The humanoid dropped from 1 m after 3 s on the ground: its body states and its joints' relative rotations.
-struct RestingPose {
-    std::vector<figure::BodyState> states;
-    std::vector<btQuaternion> rotations;
-};
-RestingPose restingPose(const std::shared_ptr<const bullet::RagdollAsset>& asset) {
-    sim::Scene scene(*bullet::methodPreset("default"));
-    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
-    for (int s = 0; s < 180; ++s) scene.step(kDt);
-    return {r.bodyStates(), relativeRotations(r)};
-}
-
-// The largest angle (rad) between a motor joint's relative rotation now and in `target`.
-double worstMotorError(const bullet::Ragdoll& r, const std::vector<btQuaternion>& target) {
-    const std::vector<btQuaternion> now = relativeRotations(r);
-    double worst = 0;
-    for (std::size_t i = 0; i < now.size(); ++i)
-        if (r.hasMotor(static_cast<int>(i))) worst = std::max(worst, angleBetween(now[i], target[i]));
-    return worst;
-}
 
 } // namespace
 
@@ -71,13 +28,13 @@ TEST_CASE("motors: a weightless humanoid driven from its load pose reaches a res
           "[bullet][motors]") {
     const auto loaded = test::loadEntity("humanoid");
     const auto asset = bullet::RagdollAsset::create(loaded.figure);
-    const RestingPose target = restingPose(asset);
+    const test::HeldPose target = restingPose(asset);
 
     sim::SceneSettings weightless;
     weightless.gravityMps2 = 0;
     weightless.ground = false;
     sim::Scene scene(*bullet::methodPreset("default"), weightless);
-    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
     const double before = worstMotorError(r, target.rotations);
     INFO("load pose to resting pose: " << before * 180 / M_PI << " degrees");
     REQUIRE(before > 0.5); // the two poses differ by more than 30 degrees at some joint
@@ -101,7 +58,7 @@ TEST_CASE("motors: gains of 0 leave a dropped ragdoll moving as a limp one", "[b
     const auto asset = bullet::RagdollAsset::create(loaded.figure);
     auto drop = [&](bool motors) {
         sim::Scene scene(*bullet::methodPreset("default"));
-        bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+        bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
         if (motors) REQUIRE(r.setMotorGains(bullet::MotorGains{0}));
         for (int s = 0; s < 90; ++s) scene.step(kDt);
         return r.bodyStates();
@@ -135,7 +92,7 @@ TEST_CASE("motors: holding the load pose at 0.4 to 400 Hz, 15 to 240 Hz steps, a
         for (const double frequency : {0.4, 4.0, 400.0}) // 0.1, 1 and 100 times a firm 4 Hz
             for (const double zeta : {0.2, 1.0}) {
                 sim::Scene scene(*bullet::methodPreset("default"));
-                bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+                bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
                 REQUIRE(r.setMotorGains(bullet::MotorGains{frequency, zeta}));
                 const double start = energy(r.bodyStates());
                 double gained = -start;
@@ -158,7 +115,7 @@ TEST_CASE("motors: refused where they cannot run, and only on joints with free a
     gains.frequencyHz = 4;
 
     sim::Scene scene(*bullet::methodPreset("default"));
-    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
     const std::vector<figure::BodyState> states = r.bodyStates();
     CHECK_FALSE(r.driveToPose(std::span(states).first(states.size() - 1)));
     std::vector<figure::BodyState> bad = states;
@@ -182,7 +139,7 @@ TEST_CASE("motors: refused where they cannot run, and only on joints with free a
 
     // The multibody backend, and a ragdoll in a world no RagdollWorld manages (its solver does not soften rows).
     sim::Scene multibody(*bullet::methodPreset("multibody"));
-    bullet::Ragdoll& m = multibody.spawn(asset, at(1.0));
+    bullet::Ragdoll& m = multibody.spawn(asset, test::turnedAt(1.0));
     CHECK_FALSE(m.setMotorGains(gains));
     CHECK_FALSE(m.driveToPose(states));
     btDefaultCollisionConfiguration configuration;
@@ -201,7 +158,7 @@ TEST_CASE("motors: a level of detail keeps the motors of the joints between its 
     const figure::Figure& f = loaded.figure;
     const auto asset = bullet::RagdollAsset::create(f);
     sim::Scene scene(*bullet::methodPreset("default"));
-    bullet::Ragdoll& r = scene.spawn(asset, at(1.0));
+    bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
     auto motorCount = [&r] {
         int n = 0;
         for (int k = 0; k < r.bulletConstraintCount(); ++k) n += r.bulletConstraintRole(k) == bullet::RowRole::Motor;

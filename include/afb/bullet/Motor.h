@@ -18,4 +18,15 @@ struct MotorGains {
     double maxForceN = std::numeric_limits<double>::infinity();   ///< bound of a linear row (sliders), N
 };
 
+/// The gains at a strength (Ragdoll::setMotorStrength): stiffness, damping and the bounds times `strength`, i.e.
+/// the frequency and the damping ratio times its square root. 0 gives a motor that is off.
+MotorGains scaledGains(const MotorGains& gains, double strength);
+
+/// How a powered ragdoll takes a hit (Ragdoll::hit): its motors drop to `strength` at once and regain the gains as
+/// set, linearly, over `regainSeconds` (a puppet unpinned on a hit and pinned back).
+struct HitReaction {
+    double strength = 0;        ///< the motors' strength right after the hit, in [0, 1] (0: limp)
+    double regainSeconds = 0.5; ///< time to full strength again, s ≥ 0 (0: no loss of strength)
+};
+
 } // namespace afb::bullet

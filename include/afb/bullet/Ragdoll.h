@@ -317,6 +317,20 @@ class Ragdoll {
     /// (unless a constraint ties a body to the world). Does not wake a ragdoll at rest. Returns false and changes
     /// nothing when the number of states is not bodyCount() or a state is not finite.
     [[nodiscard]] bool driveToPose(std::span<const figure::BodyState> target);
+    /// Scales every motor at once (the figure's muscle tone): the stiffness, damping and bounds of the gains set by
+    /// setMotorGains times `strength` in [0, 1] (scaledGains). 1, the default, is the gains as set; 0 lets the whole
+    /// figure go limp, exactly as gains of 0 do. motorGains() still answers the gains as set. Stops a regain under
+    /// way. False, changing nothing, for a strength outside [0, 1] or where setMotorGains would refuse.
+    [[nodiscard]] bool setMotorStrength(double strength);
+    /// The motors' strength now (1 unless setMotorStrength or a hit lowered it).
+    double motorStrength() const { return m_motorStrength; }
+    /// A hit: applyBodyImpulse(body, impulse, worldPoint, ImpulseRule::Always) (it wakes the ragdoll), and, when the
+    /// ragdoll has motors, their strength drops to `reaction.strength` (or stays lower) and regains linearly to 1
+    /// over `reaction.regainSeconds` of simulated time (docs/motors.md). A limp ragdoll, or one on the multibody
+    /// backend, takes the impulse alone. False, changing nothing, for a body out of range, a non-finite impulse or
+    /// point, or a reaction outside its ranges.
+    [[nodiscard]] bool hit(int body, const btVector3& impulse, const btVector3& worldPoint,
+                           const HitReaction& reaction = {});
 
     /// True while the figure is at rest by its own rules (docs/format.md §6.1). Spawned through a RagdollWorld, its
     /// bodies are then frozen (frozen()); in a plain world they are asleep in Bullet.
@@ -378,6 +392,7 @@ class Ragdoll {
     bool motorsAllowed() const;
     bool drivable(int constraint) const;          ///< the joint type has free axes (its gains and target are kept)
     void applyMotorGains(std::size_t constraint); ///< m_motorGains to its motor, in or out of the world
+    void regainStrength(double dt);               ///< a substep of a hit's regain (Action)
     void freezeBodies();                          ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
     // What the RagdollWorld that spawned it reaches (spawn, sinking): src/bullet/RagdollWorldLink.h, the one way in.
@@ -429,6 +444,8 @@ class Ragdoll {
     std::vector<MotorGains> m_motorGains;        ///< per figure constraint; empty until motors are first set
     std::vector<MotorTarget> m_motorTargets;     ///< per figure constraint
     std::vector<JointMotorConstraint*> m_motors; ///< per figure constraint, null where none (owned by m_arena)
+    double m_motorStrength = 1;                  ///< setMotorStrength, lowered by a hit
+    double m_regainPerSecond = 0;                ///< the strength's rise per simulated second after a hit (0: none)
 };
 
 } // namespace afb::bullet
