@@ -136,10 +136,14 @@ struct CreateBoxBox : btCollisionAlgorithmCreateFunc {
 
 } // namespace
 
-void useSpeculativeBoxBoxContacts(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config) {
+btCollisionAlgorithmCreateFunc& speculativeBoxBoxCreateFunc() {
     static CreateBoxBox create;
+    return create;
+}
+
+void useSpeculativeBoxBoxContacts(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config) {
     dispatcher.registerCollisionCreateFunc(BOX_SHAPE_PROXYTYPE, BOX_SHAPE_PROXYTYPE,
-                                           on ? &create
+                                           on ? &speculativeBoxBoxCreateFunc()
                                               : config.getCollisionAlgorithmCreateFunc(BOX_SHAPE_PROXYTYPE,
                                                                                        BOX_SHAPE_PROXYTYPE));
 }

@@ -13,5 +13,7 @@ namespace afb::bullet::detail {
 /// Installs the box–box algorithm into a dispatcher, or restores Bullet's default from `config`. The create
 /// function is a process-lifetime object, so a dispatcher never holds a dangling one.
 void useSpeculativeBoxBoxContacts(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config);
+/// The box–box algorithm's create function (a process-lifetime object).
+btCollisionAlgorithmCreateFunc& speculativeBoxBoxCreateFunc();
 
 } // namespace afb::bullet::detail

@@ -132,7 +132,7 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
             // Boxes against boxes: speculative points while apart (Bullet's detector reports overlap only).
             detail::useSpeculativeBoxBoxContacts(*dispatcher, m.speculativeContacts, *config);
             // Convex pairs plainly apart skip GJK: the same contacts, found cheaper.
-            detail::useSeparatedPairSkip(*dispatcher, m.separatedPairs, *config);
+            detail::useSeparatedPairSkip(*dispatcher, m.separatedPairs, *config, m.speculativeContacts);
         }
 }
 

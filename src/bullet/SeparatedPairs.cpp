@@ -5,6 +5,8 @@
 
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 
+#include "BoxBoxCollision.h"
+
 namespace afb::bullet::detail {
 namespace {
 
@@ -59,29 +61,35 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
     const btPersistentManifold* m_manifold = nullptr; // the inner algorithm's, once it has run
 };
 
-// Stateless, so one object serves every world: Bullet's algorithm comes from the creating dispatcher's own
-// configuration (the world being built), for the pair's shape types.
+// Constant once made, so one object serves every world: the algorithm behind the test is `inner`'s, or, without
+// one, Bullet's from the creating dispatcher's own configuration (the world being built) for the pair's shapes.
 struct CreateSeparatedPair : btCollisionAlgorithmCreateFunc {
+    explicit CreateSeparatedPair(btCollisionAlgorithmCreateFunc* innerCreate = nullptr) : inner(innerCreate) {}
     btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
                                                    const btCollisionObjectWrapper* w0,
                                                    const btCollisionObjectWrapper* w1) override {
         auto* dispatcher = static_cast<btCollisionDispatcher*>(ci.m_dispatcher1);
-        btCollisionAlgorithmCreateFunc* bullet =
-            dispatcher->getCollisionConfiguration()->getCollisionAlgorithmCreateFunc(
-                w0->getCollisionShape()->getShapeType(), w1->getCollisionShape()->getShapeType());
-        btCollisionAlgorithm* wrapped = bullet->CreateCollisionAlgorithm(ci, w0, w1);
+        btCollisionAlgorithmCreateFunc* create =
+            inner ? inner
+                  : dispatcher->getCollisionConfiguration()->getCollisionAlgorithmCreateFunc(
+                        w0->getCollisionShape()->getShapeType(), w1->getCollisionShape()->getShapeType());
+        btCollisionAlgorithm* wrapped = create->CreateCollisionAlgorithm(ci, w0, w1);
         void* memory = dispatcher->allocateCollisionAlgorithm(sizeof(SeparatedPairAlgorithm));
         return new (memory) SeparatedPairAlgorithm(ci, wrapped);
     }
+    btCollisionAlgorithmCreateFunc* const inner;
 };
 
 } // namespace
 
-void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config) {
-    static CreateSeparatedPair create;
+void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config,
+                          bool speculativeBoxes) {
+    static CreateSeparatedPair bullet, speculative(&speculativeBoxBoxCreateFunc());
     constexpr int kHull = CONVEX_HULL_SHAPE_PROXYTYPE, kBox = BOX_SHAPE_PROXYTYPE;
     for (auto [t0, t1] : {std::pair{kHull, kHull}, {kHull, kBox}, {kBox, kHull}})
-        dispatcher.registerCollisionCreateFunc(t0, t1, on ? &create : config.getCollisionAlgorithmCreateFunc(t0, t1));
+        dispatcher.registerCollisionCreateFunc(t0, t1, on ? &bullet : config.getCollisionAlgorithmCreateFunc(t0, t1));
+    // Boxes against boxes: in front of whichever algorithm useSpeculativeBoxBoxContacts installed.
+    if (on) dispatcher.registerCollisionCreateFunc(kBox, kBox, speculativeBoxes ? &speculative : &bullet);
 }
 
 } // namespace afb::bullet::detail

@@ -11,8 +11,11 @@
 namespace afb::bullet::detail {
 
 /// Installs the separating-axis test in front of Bullet's convex–convex algorithm for hull–hull, hull–box and
-/// box–hull pairs, or restores Bullet's default from `config`. The create function is a stateless process-lifetime
-/// object: Bullet's algorithm behind it comes from the configuration of the dispatcher that creates the pair.
-void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config);
+/// box–hull pairs, and in front of the box–box algorithm (the speculative one of BoxBoxCollision.h when
+/// `speculativeBoxes`, Bullet's otherwise); off, restores Bullet's default from `config` for the first three and
+/// leaves box–box as useSpeculativeBoxBoxContacts set it (call that first). The create functions are constant
+/// process-lifetime objects: Bullet's algorithm comes from the configuration of the dispatcher creating the pair.
+void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config,
+                          bool speculativeBoxes);
 
 } // namespace afb::bullet::detail
