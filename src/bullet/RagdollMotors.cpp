@@ -9,6 +9,7 @@
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollSolver.h"
 #include "afb/detail/Convert.h"
+#include "afb/detail/Lexer.h"
 
 namespace afb::bullet {
 namespace {
@@ -108,6 +109,26 @@ bool Ragdoll::setMotorGains(int constraint, const MotorGains& gains) {
     const auto ci = static_cast<std::size_t>(constraint);
     m_motorGains[ci] = gains;
     applyMotorGains(ci);
+    return true;
+}
+
+bool Ragdoll::setMotorGains(const MotorProfile& profile) {
+    if (!motorsAllowed()) return false;
+    const auto& constraints = figure().constraints;
+    std::vector<std::pair<std::size_t, MotorGains>> named;
+    for (const auto& [name, gains] : profile.joints) {
+        const auto it =
+            std::find_if(constraints.begin(), constraints.end(),
+                         [&name](const figure::FigureConstraint& c) { return text::equalsIgnoreCase(c.name, name); });
+        const auto ci = static_cast<std::size_t>(it - constraints.begin());
+        if (it == constraints.end() || !drivable(static_cast<int>(ci))) return false;
+        named.emplace_back(ci, gains);
+    }
+    if (!setMotorGains(profile.all)) return false;
+    for (const auto& [ci, gains] : named) {
+        m_motorGains[ci] = gains;
+        applyMotorGains(ci);
+    }
     return true;
 }
 

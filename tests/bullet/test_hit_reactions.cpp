@@ -173,6 +173,35 @@ TEST_CASE("hit: a weightless humanoid knocked limp returns to the pose it held a
     }
 }
 
+TEST_CASE("hit: with one arm limp by its profile, the arm stays where the hit sends it while the rest comes back",
+          "[bullet][motors][hit]") {
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    const test::HeldPose held = test::restingPose(asset);
+    sim::Scene scene(*bullet::methodPreset("default"), weightless());
+    bullet::Ragdoll& r = scene.spawn(asset, floating());
+    bullet::MotorProfile profile;
+    profile.all = {4, 1};
+    profile.joints = {{"l_shoulder", {0, 1}}, {"l_elbow", {0, 1}}};
+    REQUIRE(r.setMotorGains(profile));
+    REQUIRE(r.driveToPose(held.states));
+    for (int s = 0; s < 240; ++s) scene.step(1.0 / 60);
+    const int hand = bodyNamed(r, "l_hand");
+    const btVector3 at = toBt(r.bodyStates()[static_cast<std::size_t>(hand)].pose.position);
+    REQUIRE(r.hit(hand, 15 * (at - centreOfMass(r)).normalized(), at, {0, 0.5}));
+    for (int s = 0; s < 360; ++s) scene.step(1.0 / 60);
+    const std::vector<btQuaternion> now = test::relativeRotations(r);
+    double limpArm = 0, rest = 0;
+    for (std::size_t i = 0; i < now.size(); ++i) {
+        if (!r.hasMotor(static_cast<int>(i))) continue;
+        const double error = test::angleBetween(now[i], held.rotations[i]);
+        const std::string& name = r.figure().constraints[i].name;
+        double& worst = name == "l_shoulder" || name == "l_elbow" ? limpArm : rest;
+        worst = std::max(worst, error);
+    }
+    CHECK(rest < kDegree);
+    CHECK(limpArm > 5 * kDegree);
+}
+
 TEST_CASE("hit: refused out of range, and where motors cannot run the impulse alone", "[bullet][motors][hit]") {
     const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
     sim::Scene scene(*bullet::methodPreset("default"), weightless());

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "EntityFixture.h"
@@ -183,4 +184,37 @@ TEST_CASE("motors: a level of detail keeps the motors of the joints between its 
         if (r.hasMotor(static_cast<int>(i))) CHECK(r.motorGains(static_cast<int>(i)).dampingRatio == 0.5);
     for (int s = 0; s < 30; ++s) scene.step(kDt);
     CHECK(r.guardTrips() == 0);
+}
+
+TEST_CASE("motors: a profile sets every joint, then its named joints, case ignored; an unknown name is refused",
+          "[bullet][motors]") {
+    const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
+    sim::Scene scene(*bullet::methodPreset("default"));
+    bullet::Ragdoll& r = scene.spawn(asset, test::turnedAt(1.0));
+    const auto& constraints = r.figure().constraints;
+    auto indexOf = [&](const std::string& name) {
+        for (std::size_t i = 0; i < constraints.size(); ++i)
+            if (constraints[i].name == name) return static_cast<int>(i);
+        FAIL("no joint " << name);
+        return -1;
+    };
+    bullet::MotorProfile profile;
+    profile.all = {6, 1};
+    profile.joints = {{"L_Elbow", {0, 1}}, {"waist", {12, 0.5}}, {"waist", {10, 0.8}}};
+    REQUIRE(r.setMotorGains(profile));
+    CHECK(r.motorGains(indexOf("l_elbow")).frequencyHz == 0);
+    CHECK(r.motorGains(indexOf("waist")).frequencyHz == 10); // the later entry wins
+    CHECK(r.motorGains(indexOf("waist")).dampingRatio == 0.8);
+    CHECK(r.motorGains(indexOf("r_elbow")).frequencyHz == 6);
+    CHECK(r.motorGains(indexOf("neck")).frequencyHz == 6);
+
+    // A misspelt joint, or one without a motor, changes nothing.
+    for (const char* wrong : {"l_elbw", "l_wrist"}) {
+        INFO(wrong);
+        bullet::MotorProfile bad;
+        bad.all = {2, 1};
+        bad.joints = {{wrong, {1, 1}}};
+        CHECK_FALSE(r.setMotorGains(bad));
+        CHECK(r.motorGains(indexOf("r_elbow")).frequencyHz == 6);
+    }
 }

@@ -2,6 +2,9 @@
 // Joint motors: a drive that pulls a joint toward a target relative pose and velocity as an implicit
 // (stable) spring and damper, solved with the joint's other rows.
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace afb::bullet {
 
@@ -16,6 +19,14 @@ struct MotorGains {
     double dampingRatio = 1; ///< 1: critically damped; below 1 it overshoots, above it creeps; ≥ 0
     double maxTorqueNm = std::numeric_limits<double>::infinity(); ///< bound of each angular row, N·m
     double maxForceN = std::numeric_limits<double>::infinity();   ///< bound of a linear row (sliders), N
+};
+
+/// A figure's gains: `all` for every joint, then `joints` by constraint name (as the .af names it, case ignored as
+/// the engine compares names), so a character can have a strong spine, weak arms and one arm limp (frequency 0).
+/// Later entries win over earlier ones for the same joint.
+struct MotorProfile {
+    MotorGains all;
+    std::vector<std::pair<std::string, MotorGains>> joints;
 };
 
 /// The gains at a strength (Ragdoll::setMotorStrength): stiffness, damping and the bounds times `strength`, i.e.

@@ -306,6 +306,10 @@ class Ragdoll {
     /// detail. False, changing nothing, where setMotorGains(gains) would refuse, for an index out of range, or for a
     /// fixed joint or a spring.
     [[nodiscard]] bool setMotorGains(int constraint, const MotorGains& gains);
+    /// Sets every motor from a profile: `profile.all`, then each named joint's gains. False, changing nothing, where
+    /// setMotorGains(gains) would refuse, or when a name is no joint of the figure with a motor (a fixed joint, a
+    /// spring or a misspelling).
+    [[nodiscard]] bool setMotorGains(const MotorProfile& profile);
     /// The gains of figure constraint `constraint`'s motor (frequency 0 until set, and for a fixed joint or spring).
     MotorGains motorGains(int constraint) const;
     /// Whether figure constraint `constraint` has a motor in the current layout (see setMotorGains).
