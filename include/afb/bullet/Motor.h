@@ -25,8 +25,8 @@ struct MotorGains {
 /// the engine compares names), so a character can have a strong spine, weak arms and one arm limp (frequency 0).
 /// Later entries win over earlier ones for the same joint.
 struct MotorProfile {
-    MotorGains all;
-    std::vector<std::pair<std::string, MotorGains>> joints;
+    MotorGains all;                                         ///< every joint with a motor
+    std::vector<std::pair<std::string, MotorGains>> joints; ///< then these, by constraint name
 };
 
 /// The gains at a strength (Ragdoll::setMotorStrength): stiffness, damping and the bounds times `strength`, i.e.
