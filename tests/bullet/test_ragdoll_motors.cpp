@@ -186,7 +186,7 @@ TEST_CASE("motors: a level of detail keeps the motors of the joints between its 
     CHECK(r.guardTrips() == 0);
 }
 
-TEST_CASE("motors: a profile sets every joint, then its named joints, case ignored; an unknown name is refused",
+TEST_CASE("motors: a profile sets every joint, then its named joints with case ignored, and refuses an unknown name",
           "[bullet][motors]") {
     const auto asset = bullet::RagdollAsset::create(test::loadEntity("humanoid").figure);
     sim::Scene scene(*bullet::methodPreset("default"));
