@@ -84,12 +84,13 @@ struct CreateSeparatedPair : btCollisionAlgorithmCreateFunc {
 
 void useSeparatedPairSkip(btCollisionDispatcher& dispatcher, bool on, btCollisionConfiguration& config,
                           bool speculativeBoxes) {
-    static CreateSeparatedPair bullet, speculative(&speculativeBoxBoxCreateFunc());
+    static CreateSeparatedPair bulletOwn, speculative(&speculativeBoxBoxCreateFunc());
     constexpr int kHull = CONVEX_HULL_SHAPE_PROXYTYPE, kBox = BOX_SHAPE_PROXYTYPE;
     for (auto [t0, t1] : {std::pair{kHull, kHull}, {kHull, kBox}, {kBox, kHull}})
-        dispatcher.registerCollisionCreateFunc(t0, t1, on ? &bullet : config.getCollisionAlgorithmCreateFunc(t0, t1));
+        dispatcher.registerCollisionCreateFunc(t0, t1,
+                                               on ? &bulletOwn : config.getCollisionAlgorithmCreateFunc(t0, t1));
     // Boxes against boxes: in front of whichever algorithm useSpeculativeBoxBoxContacts installed.
-    if (on) dispatcher.registerCollisionCreateFunc(kBox, kBox, speculativeBoxes ? &speculative : &bullet);
+    if (on) dispatcher.registerCollisionCreateFunc(kBox, kBox, speculativeBoxes ? &speculative : &bulletOwn);
 }
 
 } // namespace afb::bullet::detail

@@ -12,6 +12,7 @@
 #include "afb/bullet/Convert.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
 
 using namespace afb;
 using bullet::toBt;
@@ -69,16 +70,8 @@ btVector3 centreOfMass(const bullet::Ragdoll& r) {
     return toBt(Eigen::Vector3d(sum / mass));
 }
 
-double kineticEnergy(const bullet::Ragdoll& r) {
-    double e = 0;
-    for (int k = 0; k < r.rigidBodyCount(); ++k) {
-        const btRigidBody& b = r.rigidBody(k);
-        const btVector3 w = b.getAngularVelocity();
-        e += 0.5 * double(b.getLinearVelocity().length2()) / double(b.getInvMass()) +
-             0.5 * double(w.dot(b.getInvInertiaTensorWorld().inverse() * w));
-    }
-    return e;
-}
+// Kinetic energy, J (no gravity here).
+double kineticEnergy(const bullet::Ragdoll& r) { return sim::figureEnergyJ(r.figure(), r.bodyStates(), 0); }
 
 } // namespace
 

@@ -14,6 +14,7 @@
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/figure/Lod.h"
 #include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
 
 using namespace afb;
 using test::restingPose;
@@ -79,16 +80,7 @@ TEST_CASE("motors: holding the load pose at 0.4 to 400 Hz, 15 to 240 Hz steps, a
     const auto loaded = test::loadEntity("humanoid");
     const figure::Figure& f = loaded.figure;
     const auto asset = bullet::RagdollAsset::create(f);
-    auto energy = [&](const std::vector<figure::BodyState>& states) {
-        double e = 0;
-        for (std::size_t i = 0; i < states.size(); ++i) {
-            const figure::FigureBody& b = f.bodies[i];
-            const Eigen::Vector3d w = states[i].pose.rotation.transpose() * states[i].angularVelocity;
-            e += 0.5 * b.massKg * states[i].linearVelocity.squaredNorm() + 0.5 * w.dot(b.inertiaKgM2.cwiseProduct(w)) +
-                 b.massKg * 9.81 * states[i].pose.position.z();
-        }
-        return e;
-    };
+    auto energy = [&](const std::vector<figure::BodyState>& states) { return sim::figureEnergyJ(f, states, 9.81); };
     for (const double hz : {15.0, 30.0, 60.0, 120.0, 240.0})
         for (const double frequency : {0.4, 4.0, 400.0}) // 0.1, 1 and 100 times a firm 4 Hz
             for (const double zeta : {0.2, 1.0}) {
