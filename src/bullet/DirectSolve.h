@@ -214,12 +214,12 @@ struct RagdollSolver::Direct {
         std::vector<int> plainDynamic; // rows with a side on a dynamic body of no group
         std::vector<int> seen, taken;
         std::vector<double> toGo, added;
-        void clear(std::size_t groups) {
+        void clear(std::size_t groupCount) {
             rows.clear();
             plainDynamic.clear();
             seen.clear(); // join() marks with row indices, which the next step reuses
-            if (ofGroup.size() < groups) ofGroup.resize(groups);
-            for (std::size_t g = 0; g < groups; ++g) ofGroup[g].clear();
+            if (ofGroup.size() < groupCount) ofGroup.resize(groupCount);
+            for (std::size_t g = 0; g < groupCount; ++g) ofGroup[g].clear();
         }
     };
     Block block;

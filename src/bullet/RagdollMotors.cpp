@@ -116,13 +116,14 @@ bool Ragdoll::setMotorGains(const MotorProfile& profile) {
     if (!motorsAllowed()) return false;
     const auto& constraints = figure().constraints;
     std::vector<std::pair<std::size_t, MotorGains>> named;
-    for (const auto& [name, gains] : profile.joints) {
+    for (const auto& joint : profile.joints) {
+        const std::string& name = joint.first; // a named reference: lambdas cannot capture structured bindings in C++20
         const auto it =
             std::find_if(constraints.begin(), constraints.end(),
                          [&name](const figure::FigureConstraint& c) { return text::equalsIgnoreCase(c.name, name); });
         const auto ci = static_cast<std::size_t>(it - constraints.begin());
         if (it == constraints.end() || !drivable(static_cast<int>(ci))) return false;
-        named.emplace_back(ci, gains);
+        named.emplace_back(ci, joint.second);
     }
     if (!setMotorGains(profile.all)) return false;
     for (const auto& [ci, gains] : named) {
