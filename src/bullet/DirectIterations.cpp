@@ -97,12 +97,33 @@ void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody
     }
 }
 
+bool RagdollSolver::Direct::anyOutsideGroups() const {
+    for (const auto* list : {&nonContact, &contact})
+        for (const FreeRow& fr : *list)
+            if (groupOf[static_cast<std::size_t>(fr.c->m_solverBodyIdA)] < 0 &&
+                groupOf[static_cast<std::size_t>(fr.c->m_solverBodyIdB)] < 0)
+                return true;
+    return false;
+}
+
 double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& bodyPool,
                                             btAlignedObjectArray<btSolverConstraint>& contactPool,
                                             btAlignedObjectArray<btSolverConstraint>& rollingPool,
-                                            btSingleConstraintRowSolver rolling, int iteration, bool contacts) {
+                                            btSingleConstraintRowSolver rolling, int iteration, bool contacts,
+                                            InTurn which) {
     // In block mode the rows through the groups are the block's; the others are taken here.
-    auto inTurn = [this](const FreeRow& fr) { return figureIterations == 0 || (fr.group[0] < 0 && fr.group[1] < 0); };
+    const auto outsideGroups = [this](const btSolverConstraint& c) {
+        return groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)] < 0 &&
+               groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)] < 0;
+    };
+    auto inTurn = [which, &outsideGroups](const FreeRow& fr) {
+        switch (which) {
+        case InTurn::All: return true;
+        case InTurn::OutsideBlock: return fr.group[0] < 0 && fr.group[1] < 0;
+        case InTurn::OutsideGroups: return outsideGroups(*fr.c);
+        }
+        return true;
+    };
     // One row: Bullet's update with the row's effective mass (through the groups it moves) and its response.
     // Returns the row's residual term, dl² / invEffectiveMass² (0: no change).
     auto resolve = [this, &bodyPool](FreeRow& fr) -> double {
@@ -140,6 +161,7 @@ double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& 
     }
     for (int j = 0; j < rollingPool.size(); ++j) {
         btSolverConstraint& c = rollingPool[j];
+        if (which == InTurn::OutsideGroups && !outsideGroups(c)) continue;
         const btScalar total = contactPool[c.m_frictionIndex].m_appliedImpulse;
         if (total <= 0) continue;
         const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
@@ -158,9 +180,10 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
     auto inTurn = [&](bool contacts) {
         return d.resolveInTurn(bodies, m_tmpSolverContactConstraintPool,
                                m_tmpSolverContactRollingFrictionConstraintPool, m_resolveSingleConstraintRowGeneric,
-                               iteration, contacts);
+                               iteration, contacts,
+                               d.blockIterations == 0 ? Direct::InTurn::All : Direct::InTurn::OutsideBlock);
     };
-    if (d.figureIterations == 0) {
+    if (d.blockIterations == 0) {
         // The joints exactly, then every other row in turn, those through the groups with the groups' response.
         const double residual = d.solveJoints(bodies, joints);
         return static_cast<btScalar>(std::max(residual, inTurn(iteration < infoGlobal.m_numIterations)));
@@ -173,6 +196,21 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
     residual = std::max(residual, d.solveJoints(bodies, joints));
     residual = std::max(residual, d.solveFigureBlock(bodies, iteration, true));
     return static_cast<btScalar>(residual);
+}
+
+// Block mode's few iterations are the ragdolls'; a game's bodies among themselves (a stack of crates a ragdoll lies
+// on) keep the world's count. Their rows move no ragdoll body, so the joints stay as the block left them.
+void RagdollSolver::solveDirectOutsideGroups(int firstIteration, const btContactSolverInfo& infoGlobal) {
+    Direct& d = *m_direct;
+    if (!d.anyOutsideGroups()) return;
+    const int world = std::max(m_maxOverrideNumSolverIterations, infoGlobal.m_numIterations);
+    for (int iteration = firstIteration; iteration < world; ++iteration) {
+        const double residual =
+            d.resolveInTurn(m_tmpSolverBodyPool, m_tmpSolverContactConstraintPool,
+                            m_tmpSolverContactRollingFrictionConstraintPool, m_resolveSingleConstraintRowGeneric,
+                            iteration, iteration < infoGlobal.m_numIterations, Direct::InTurn::OutsideGroups);
+        if (residual <= double(infoGlobal.m_leastSquaresResidualThreshold)) break;
+    }
 }
 
 void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGlobal) {

@@ -156,11 +156,16 @@ struct RagdollSolver::Direct {
                        const btAlignedObjectArray<btSolverConstraint>& pool);
     void apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl);
     double solveFigureBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
-    // The free rows taken one at a time in an iteration (all of them, or in block mode those outside the block).
+    // Whether some free row joins two bodies of no group (InTurn::OutsideGroups would take it).
+    bool anyOutsideGroups() const;
+    // Which free rows an in-turn pass takes: all of them; in block mode those outside the block; or only the rows
+    // between bodies of no group (a game's bodies among themselves), which block mode iterates further alone.
+    enum class InTurn { All, OutsideBlock, OutsideGroups };
+    // The free rows taken one at a time in an iteration.
     double resolveInTurn(btAlignedObjectArray<btSolverBody>& bodyPool,
                          btAlignedObjectArray<btSolverConstraint>& contactPool,
                          btAlignedObjectArray<btSolverConstraint>& rollingPool, btSingleConstraintRowSolver rolling,
-                         int iteration, bool contacts);
+                         int iteration, bool contacts, InTurn which);
     // This iteration's rows of the block (joining it those that would move) and their velocity still to go.
     void gatherBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
     // Adds a completed row to the block with its couplings.
@@ -201,6 +206,7 @@ struct RagdollSolver::Direct {
     bool enabled = false;
     bool frictionThroughGroups = false; // Method::frictionThroughFigure
     int figureIterations = 0;           // Method::figureIterations (0: the rows through groups one at a time)
+    int blockIterations = 0;            // this solve's: figureIterations, or 0 when a group has soft rows
     int figureSweeps = 0;               // Method::figureSweeps
     double figureTolerance = 0;         // the block's sweeps stop once no row's velocity moves by its root (m²/s²)
     // The figure block (solveFigureBlock) of this step: every row that has joined it (a row joins when it first

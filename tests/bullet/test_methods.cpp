@@ -968,9 +968,11 @@ TEST_CASE("friction through the figure: a humanoid lying still keeps its hinges'
     // hips turning apart about their locked axes at up to 0.18 rad/s, which the position pass takes back. With
     // Method::frictionThroughFigure the friction rows move the figure as its joints let it and the solve ends with
     // the joints held. Without the position pass, what the velocities leave shows as hinges whose two axes part
-    // while the figure lies still (Bullet's joint ERP alone pulls them back).
+    // while the figure lies still (Bullet's joint ERP alone pulls them back). Rows one at a time (figure-iterations
+    // 0): block mode solves the joints after the friction rows in every iteration (test_figure_block.cpp).
     auto worstHingeAxes = [](bool through) {
         Method m = *afb::bullet::methodPreset("default");
+        m.figureIterations = 0;
         m.positionIterations = 0;
         m.positionTree = 0;
         m.frictionThroughFigure = through;

@@ -149,6 +149,7 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     struct Direct;
     bool buildDirect();
     btScalar solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal);
+    void solveDirectOutsideGroups(int firstIteration, const btContactSolverInfo& infoGlobal);
     void solveDirectSplitImpulse(const btContactSolverInfo& infoGlobal);
 
     // Flat (Bullet's open hash map): tracking a constraint at spawn allocates nothing once the table has grown,
