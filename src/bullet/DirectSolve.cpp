@@ -152,8 +152,8 @@ bool RagdollSolver::buildDirect() {
     // row by row), so a solve holding a motor-driven ragdoll takes its rows one at a time.
     // Soft rows are those with a cfm: an unbounded motor's in the joint solve, a bounded one's among the free rows.
     const auto& pool = m_tmpSolverNonContactConstraintPool;
-    bool soft = std::ranges::any_of(d.live(), [](const Direct::Group& g) { return g.soft; });
-    for (int j = 0; j < pool.size() && !soft; ++j)
+    bool soft = d.figureIterations > 0 && std::ranges::any_of(d.live(), [](const Direct::Group& g) { return g.soft; });
+    for (int j = 0; d.figureIterations > 0 && j < pool.size() && !soft; ++j)
         soft = pool[j].m_cfm != 0 && (d.groupOf[static_cast<std::size_t>(pool[j].m_solverBodyIdA)] >= 0 ||
                                       d.groupOf[static_cast<std::size_t>(pool[j].m_solverBodyIdB)] >= 0);
     d.blockIterations = soft ? 0 : d.figureIterations;

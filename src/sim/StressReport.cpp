@@ -1,6 +1,7 @@
 // The stress matrix's cells and its reports (Stress.h): the table, the Markdown page and the JSON document.
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -67,6 +68,11 @@ const StressCell* cellOf(const std::vector<StressCell>& cells, const std::string
 
 // The runs per cell (1 for a matrix without yaws).
 int yawCount(const std::vector<StressCell>& cells) { return cells.empty() ? 1 : cells.front().total; }
+
+// A time that may not have come: its value, or null.
+nlohmann::ordered_json orNull(const std::optional<double>& seconds) {
+    return seconds ? nlohmann::ordered_json(*seconds) : nlohmann::ordered_json(nullptr);
+}
 
 } // namespace
 
@@ -208,7 +214,7 @@ std::string stressJson(const std::vector<StressResult>& results, const std::vect
             const StressResult& r = results[*c.firstFailure];
             first = {{"yaw_deg", r.yawDeg},
                      {"cause", std::string(toString(r.cause))},
-                     {"failed_at_s", r.failedAtS ? nlohmann::ordered_json(*r.failedAtS) : nullptr},
+                     {"failed_at_s", orNull(r.failedAtS)},
                      {"detail", r.detail}};
         }
         cellsJson.push_back({{"scenario", c.scenario},
@@ -226,10 +232,10 @@ std::string stressJson(const std::vector<StressResult>& results, const std::vect
                                     {"yaw_deg", r.yawDeg},
                                     {"passed", r.passed()},
                                     {"cause", std::string(toString(r.cause))},
-                                    {"failed_at_s", r.failedAtS ? nlohmann::ordered_json(*r.failedAtS) : nullptr},
+                                    {"failed_at_s", orNull(r.failedAtS)},
                                     {"detail", r.detail},
                                     {"simulated_s", r.simulatedS},
-                                    {"rest_at_s", r.restAtS ? nlohmann::ordered_json(*r.restAtS) : nullptr},
+                                    {"rest_at_s", orNull(r.restAtS)},
                                     {"bodies", r.bodies},
                                     {"max_speed_mps", r.maxSpeedMps},
                                     {"max_anchor_error_m", r.maxAnchorErrorM},

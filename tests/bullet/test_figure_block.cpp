@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "BitEqual.h"
 #include "EntityFixture.h"
 #include "FigureFixture.h"
 #include "LyingHumanoid.h"
@@ -160,8 +161,8 @@ TEST_CASE("figure block: a game's crates under a humanoid keep the world's itera
 
 namespace {
 
-// A weightless humanoid whose hand is hit, after 90 steps: every body's transform, with 4 Hz motors holding the load
-// pose or limp.
+// A weightless humanoid hit off its first body's centre, after 90 steps: every body's transform, with 4 Hz motors
+// holding the load pose or limp.
 std::vector<btTransform> hitHumanoid(int figureIterations, bool motors) {
     Method method = *afb::bullet::methodPreset("default");
     method.figureIterations = figureIterations;
@@ -177,8 +178,8 @@ std::vector<btTransform> hitHumanoid(int figureIterations, bool motors) {
         REQUIRE(r.setMotorGains(afb::bullet::MotorGains{4, 1}));
         REQUIRE(r.driveToPose(r.bodyStates()));
     }
-    const btVector3 hand = r.rigidBody(0).getCenterOfMassPosition() + btVector3(0.3f, 0, 0.2f);
-    REQUIRE(r.hit(0, btVector3(10, 4, 20), hand, {1, 0.5}));
+    const btVector3 at = r.rigidBody(0).getCenterOfMassPosition() + btVector3(0.3f, 0, 0.2f);
+    REQUIRE(r.hit(0, btVector3(10, 4, 20), at, {1, 0.5}));
     for (int s = 0; s < 90; ++s) scene.step(1.0 / 60);
     std::vector<btTransform> out;
     for (int b = 0; b < r.bodyCount(); ++b) out.push_back(r.collisionObject(b).getWorldTransform());
@@ -186,9 +187,7 @@ std::vector<btTransform> hitHumanoid(int figureIterations, bool motors) {
 }
 
 bool sameTransforms(const std::vector<btTransform>& a, const std::vector<btTransform>& b) {
-    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const auto& x, const auto& y) {
-               return x.getOrigin() == y.getOrigin() && x.getBasis() == y.getBasis();
-           });
+    return std::ranges::equal(a, b, afb::test::bitEqual);
 }
 
 } // namespace

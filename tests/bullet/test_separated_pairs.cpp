@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "BitEqual.h"
 #include "EntityFixture.h"
 #include "afb/bullet/RagdollAsset.h"
 #include "afb/sim/RawRagdoll.h"
@@ -52,10 +53,6 @@ Outcome dropThree(const std::string& method, bool skip) {
     return out;
 }
 
-bool bitEqual(const btTransform& a, const btTransform& b) {
-    return a.getOrigin() == b.getOrigin() && a.getBasis() == b.getBasis();
-}
-
 } // namespace
 
 TEST_CASE("separated pairs: skipping GJK for pairs apart along their centre line leaves every body where Bullet's "
@@ -74,7 +71,7 @@ TEST_CASE("separated pairs: skipping GJK for pairs apart along their centre line
         REQUIRE(skipped.transforms.size() == bullet.transforms.size());
         for (std::size_t i = 0; i < bullet.transforms.size(); ++i) {
             INFO("body " << i);
-            CHECK(bitEqual(skipped.transforms[i], bullet.transforms[i]));
+            CHECK(test::bitEqual(skipped.transforms[i], bullet.transforms[i]));
         }
     }
 }

@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "BitEqual.h"
 #include "EntityFixture.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/RagdollAsset.h"
@@ -532,10 +533,9 @@ TEST_CASE("explosion guard: a NaN in one ragdoll never reaches the others or the
             const btTransform& b = injected.others[s][i];
             REQUIRE(finite(b));
             const btTransform& f = frozen.others[s][i];
-            if (!(f.getOrigin() == b.getOrigin() && f.getBasis() == b.getBasis())) ++differences;
+            if (!afb::test::bitEqual(f, b)) ++differences;
             const btTransform& a = clean.others[s][i];
-            if (i + 1 == injected.others[s].size() && !(a.getOrigin() == b.getOrigin() && a.getBasis() == b.getBasis()))
-                ++boxDifferences;
+            if (i + 1 == injected.others[s].size() && !afb::test::bitEqual(a, b)) ++boxDifferences;
         }
     CHECK(differences == 0);
     CHECK(boxDifferences == 0);
@@ -556,7 +556,7 @@ TEST_CASE("explosion guard: with the direct joint solve too, the user's box neve
         const btTransform& a = clean.others[s].back();
         const btTransform& b = injected.others[s].back();
         REQUIRE(finite(b));
-        if (!(a.getOrigin() == b.getOrigin() && a.getBasis() == b.getBasis())) ++boxDifferences;
+        if (!afb::test::bitEqual(a, b)) ++boxDifferences;
     }
     CHECK(boxDifferences == 0);
 }
