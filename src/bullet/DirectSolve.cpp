@@ -290,7 +290,7 @@ void RagdollSolver::Direct::collectFreeRows(btAlignedObjectArray<btSolverConstra
                                             btAlignedObjectArray<btSolverConstraint>& frictionPool) {
     // The other rows, with their responses through the groups.
     // Friction rows keep Bullet's response unless frictionThroughGroups (the next block solve restores the joints
-    // they disturb, but the last iteration's friction leaves them disturbed; README: Methods, point 20).
+    // they disturb, but the last iteration's friction leaves them disturbed; docs/methods.md).
     auto addFree = [&](std::vector<Direct::FreeRow>& out, btSolverConstraint& c, bool throughGroups) {
         Direct::FreeRow fr;
         fr.c = &c;
@@ -306,7 +306,7 @@ void RagdollSolver::Direct::collectFreeRows(btAlignedObjectArray<btSolverConstra
             // Joint friction (a row bounded on both sides: ±friction · the joint's last reaction) keeps Bullet's
             // response as contact friction does; limits (bounded on one side) move the whole group. Through the
             // group it was a third of the columns to solve each step and held nothing better: without it `exact`
-            // costs 19 % less and passes more of the stress matrix (README: Methods, point 17).
+            // costs 19 % less and passes more of the stress matrix (docs/methods.md).
             const btSolverConstraint& c = pool[j];
             const bool jointFriction = c.m_lowerLimit < 0 && c.m_upperLimit > 0 && c.m_upperLimit < unbounded;
             addFree(nonContact, pool[j], !jointFriction);
@@ -334,7 +334,7 @@ void RagdollSolver::Direct::prepareColumns(const btAlignedObjectArray<btSolverBo
     // Per group, the columns J M⁻¹ Jᵣᵀ of the free rows touching it. A row that touches only groups factored
     // along their trees waits until an update first needs its effective mass (complete()): a contact or limit row
     // that stays apart for the whole solve never pays for its responses (46 % of the columns of `exact`'s
-    // 4-humanoid drop; README: Methods, point 18). A row touching a densely factored group is solved here, with
+    // 4-humanoid drop; docs/performance.md). A row touching a densely factored group is solved here, with
     // that group's other columns, in one batch.
     if (columns.size() < used) columns.resize(used);
     for (std::size_t g = 0; g < used; ++g) columns[g].clear();

@@ -187,7 +187,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         m.constantVelocityUniversal = true;
         m.positionIterations = 2;
         // Merged, a humanoid's forearm went into its torso at the 1 m drop (right shoulder 15.5 mm / 8.5° against
-        // 8.8 mm / 4.5°), though the stress matrix gains (README: Economy).
+        // 8.8 mm / 4.5°), though the stress matrix gains (docs/performance.md).
         m.mergeFixed = false;
         return m;
     }
@@ -195,7 +195,7 @@ std::optional<Method> methodPreset(std::string_view name) {
         // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
         // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced
         // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
-        // 10 m for 0.94× this cost's predecessor (README: Methods). The velocity-exact joints still drift at the
+        // 10 m for 0.94× this cost's predecessor (docs/methods.md). The velocity-exact joints still drift at the
         // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without
         // a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree step also puts
         // limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only), moving
@@ -211,7 +211,7 @@ std::optional<Method> methodPreset(std::string_view name) {
     if (name == "multibody") {
         // Reduced coordinates: no joint rows to iterate, warm-start or project; contacts as the rigid default's
         // (20 iterations, vertex contacts, speculative, warm-started), limits our own speculative rows, then 4
-        // position sweeps over the limits and contacts (README: the multibody backend). Continuous collision is
+        // position sweeps over the limits and contacts (docs/methods.md). Continuous collision is
         // the rigid backend's (Bullet's multibody world has none).
         Method m = iterative(name);
         m.backend = Backend::Multibody;

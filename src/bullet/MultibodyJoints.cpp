@@ -44,7 +44,7 @@ MultibodyJointParts universalJoint(const FigureConstraint& c, const MultibodyJoi
     // §4.4: two free swings and no spin about the shafts: a spherical link whose twist a row holds. A Cardan pair
     // of revolute links (a massless link turning about one axis, the child about a second) has a singular pose at
     // 90° from the load pose, reached at impact, where the first coordinate spins the child about its own long axis
-    // and explodes (README).
+    // and explodes (docs/stability.md).
     MultibodyJointParts out;
     out.link = LinkKind::Spherical;
     out.twistRow = true;

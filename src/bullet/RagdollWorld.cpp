@@ -118,13 +118,13 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
     // The direct solve takes a batch of islands (Bullet batches small islands up to m_minimumSolverBatchSize
     // constraints) through its own path when a ragdoll is in it and through Bullet's otherwise, and the two round
     // differently: a game's box alone in its island then moved by 10⁻⁸ m differently when a ragdoll elsewhere
-    // froze. One island per solve keeps every island's result independent of the others (README: Methods).
+    // froze. One island per solve keeps every island's result independent of the others (docs/methods.md).
     if (m.directJoints) info.m_minimumSolverBatchSize = 1;
     // Bullet's defaults are (1, 0) for convex–plane and (0, 3) for convex–convex: no perturbed points.
     if (auto* dispatcher = dynamic_cast<btCollisionDispatcher*>(world.getDispatcher()))
         if (auto* config = dynamic_cast<btDefaultCollisionConfiguration*>(dispatcher->getCollisionConfiguration())) {
             // Convex–convex pairs (bodies on bodies) keep Bullet's default: perturbing GJK three more times
-            // per pair tripled the collision cost of a ragdoll and did not change its accuracy (README).
+            // per pair tripled the collision cost of a ragdoll and did not change its accuracy.
             if (m.multipointContacts) config->setPlaneConvexMultipointIterations(3, 3);
             else config->setPlaneConvexMultipointIterations(1, 0);
             // Hulls against planes: every vertex within reach (a body on an edge knows its far corners).

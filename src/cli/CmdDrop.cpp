@@ -56,7 +56,7 @@ void addDropOptions(CLI::App* cmd, DropCli& opt) {
     addMethodOptions(cmd, opt.method);
     cmd->add_option("--precision", opt.precision, "Bullet build: float or double (default: this binary's)")
         ->check(CLI::IsMember({"float", "double"}));
-    cmd->add_flag("--strict", opt.strict, "Refuse values the builder would repair (README: hostile numbers)");
+    cmd->add_flag("--strict", opt.strict, "Refuse values the builder would repair (docs/format.md: hostile numbers)");
     cmd->add_flag("--no-sleep", opt.noSleep, "Never put figures to rest (the rest rules are off)");
     cmd->add_flag("--verbose", opt.verbose, "Print every knob of the method (JSON and CSV reports always have them)");
     cmd->add_flag("--stop-at-rest", opt.drop.stopAtRest, "End a run when every instance is at rest");

@@ -184,7 +184,8 @@ void addGenCommand(CLI::App& app, int& exitCode) {
                     "model's file name");
     cmd->add_option("--mass", opt->massKg, "Total mass, kg (default: 500 kg/m^3 times the bodies' volume)")
         ->check(within(0.01, 1e5));
-    cmd->add_option("--rules", opt->rules, "JSON rules overriding the built-in humanoid template (README: afb gen)");
+    cmd->add_option("--rules", opt->rules,
+                    "JSON rules overriding the built-in humanoid template (docs/cli.md: afb gen)");
     cmd->add_option("--unit-m", opt->unitM,
                     "Metres per model unit (default by format: md5 0.0254, or 1 for an md5mesh under 0.2 m tall at "
                     "0.0254, with a note; glTF 1, FBX 0.01 x UnitScaleFactor, others 0.0254)")

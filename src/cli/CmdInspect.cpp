@@ -130,7 +130,7 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
         ->expected(3)
         ->check(finite());
     cmd->add_option("--unit", opt->metresPerUnit, "Metres per Doom unit")->check(positive())->capture_default_str();
-    cmd->add_flag("--strict", opt->strict, "Refuse values the builder would repair (README: hostile numbers)");
+    cmd->add_flag("--strict", opt->strict, "Refuse values the builder would repair (docs/format.md: hostile numbers)");
     cmd->add_flag("--json", opt->json,
                   "Print JSON: name, metresPerUnit, joints, totalMassKg, selfCollision, bodies[{name, joint, mod, "
                   "shape, vertices, volumeM3, massKg, centerOfMassM (model space), principalMomentsKgM2, "

@@ -1,4 +1,4 @@
-// Hostile numbers (bounds in Bounds.h, README "Hostile numbers"): every number of the decl is finite,
+// Hostile numbers (bounds in Bounds.h, docs/format.md "Hostile numbers"): every number of the decl is finite,
 // and what reaches the physics engine stays inside bounds it can simulate. Values outside are errors, or
 // repaired with a warning that says "repaired" and how (errors under FigureInput::strict).
 #include "afb/figure/Bounds.h"

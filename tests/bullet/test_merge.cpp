@@ -207,8 +207,8 @@ TEST_CASE("merge: a merged humanoid lands and rests no deeper than the unmerged 
           "[bullet][merge]") {
     // Bullet's compound algorithm tested a child only once its bounding box overlapped the other body (no
     // speculative reach) and let the hand (selfCollision 0) touch the figure wherever its forearm may: the merged
-    // humanoid's forearm went 51 mm into a foot in the 1 m drop where the unmerged figure's worst is 28 mm (README:
-    // Economy).
+    // humanoid's forearm went 51 mm into a foot in the 1 m drop where the unmerged figure's worst is 28 mm
+    // (docs/performance.md).
     const auto loaded = test::loadEntity("humanoid");
     const figure::Figure& f = loaded.figure;
     const auto asset = bullet::RagdollAsset::create(f);
@@ -217,7 +217,7 @@ TEST_CASE("merge: a merged humanoid lands and rests no deeper than the unmerged 
     off.mergeFixed = false;
     double peakOn = 0, peakOff = 0, restOn = 0, restOff = 0;
     int selfContacts = 0, forbidden = 0;
-    // Four yaws, as the README's figures are taken: one drop is a chaotic sample (either of the two can rest a
+    // Four yaws, as the documented figures are taken: one drop is a chaotic sample (either of the two can rest a
     // few millimetres deeper than the other at some yaw).
     for (const double yaw : {0.0, M_PI / 2, M_PI, 3 * M_PI / 2}) {
         sim::Scene sceneOn(on), sceneOff(off);
@@ -270,7 +270,7 @@ TEST_CASE("merge: a merged humanoid lands and rests no deeper than the unmerged 
                          << " mm, rest " << restOff * 1000 << " mm; self-contact points " << selfContacts);
     CHECK(forbidden == 0);
     // The stated depth: at rest within the preset regression's 10 mm (the default method rests a few millimetres
-    // deep, merged or not: README, Methods), and within 3 mm of the unmerged figure's worst.
+    // deep, merged or not: docs/methods.md), and within 3 mm of the unmerged figure's worst.
     CHECK(restOn <= 0.010);
     CHECK(restOn <= restOff + 0.003);
     CHECK(peakOn <= peakOff + 0.005);

@@ -367,7 +367,7 @@ TEST_CASE("multibody: a universal joint keeps its shafts from twisting, through 
 
 TEST_CASE("multibody: the zsec sets dropped from 10 m and 100 m never explode", "[bullet][multibody][corpus]") {
     // The first version exploded on all three from 10 m (a Cardan pair at its singular pose, then Bullet's explicit
-    // velocity-product terms pumping energy: README, the multibody backend). 100 m lands at the damped terminal
+    // velocity-product terms pumping energy: docs/stability.md). 100 m lands at the damped terminal
     // speed, about 14 m/s, 8.5 s into the drop.
     AFB_REQUIRE_CORPUS(corpus);
     afb::text::Diagnostics diags;
@@ -471,7 +471,7 @@ TEST_CASE("both backends: a spring settles where k·ΔL² = m·g / its length ro
     // §4.7's force is quadratic: F = k·(L − rest)², so the arm (16 kg) hanging from the top by a spring alone
     // (anchors at its centre of mass and 10 units straight above it: no torque) settles at ΔL = √(m·g/k). For
     // the multibody backend the two bodies are two trees (a spring is not a tree edge): the row spans both. One air
-    // friction for the figure (the multibody backend damps a figure with one factor, README), 0.1 per step, so
+    // friction for the figure (the multibody backend damps a figure with one factor, docs/methods.md), 0.1 per step, so
     // the swing has settled in 5 s.
     auto springFigure = [](const std::string& extra) {
         const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},

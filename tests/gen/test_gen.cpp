@@ -368,8 +368,8 @@ const std::pair<const char*, const char*> kZsecSets[] = {{"pistol", "zsecpistol.
 
 } // namespace
 
-// Bounds (README, afb gen): the generator fits the mesh, the hand-made figures are thinner (bones, small boxes) and
-// fewer (hands, clavicles, the neck merged), so the counts, masses and positions agree within these margins.
+// Bounds (docs/cli.md, afb gen): the generator fits the mesh, the hand-made figures are thinner (bones, small boxes)
+// and fewer (hands, clavicles, the neck merged), so the counts, masses and positions agree within these margins.
 TEST_CASE("gen: the zsec figures generated from their meshes against the hand-made ones", "[gen][corpus]") {
     AFB_REQUIRE_CORPUS(corpus);
     for (const auto& [set, mesh] : kZsecSets) {
@@ -388,7 +388,7 @@ TEST_CASE("gen: the zsec figures generated from their meshes against the hand-ma
     }
 }
 
-// The table of the README: `afb_tests "[.gen-table]"`.
+// A comparison table for docs/cli.md (afb gen): `afb_tests "[.gen-table]"`.
 TEST_CASE("gen: zsec comparison table", "[.gen-table]") {
     AFB_REQUIRE_CORPUS(corpus);
     std::printf(
@@ -499,7 +499,7 @@ TEST_CASE("gen: the corpus rigs spawn in their bind pose and settle", "[gen][cor
     }
 }
 
-// The rigs table of the README: `afb_tests "[.gen-table]"`.
+// The rigs table of docs/cli.md (afb gen): `afb_tests "[.gen-table]"`.
 TEST_CASE("gen: rigs table", "[.gen-table]") {
     AFB_REQUIRE_CORPUS(corpus);
     std::printf(

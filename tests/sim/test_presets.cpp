@@ -30,10 +30,11 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
     // (world iterations 10, joints 20, no extras), kept as the reference the presets must beat.
     const Bounds bounds[] = {
         // Rest penetration at the accuracy target's 5 mm for every preset (since hulls hold each corner once and limit
-        // rows are warm-started: README, Methods points 7 and 11). Measured with position-velocity (point 12), the
-        // position pass's static friction (point 14) and the self-contact cap (point 15). A drop is chaotic: one yaw's
+        // rows are warm-started: docs/methods.md). Measured with position-velocity, the
+        // position pass's static friction and the self-contact cap. A drop is chaotic: one yaw's
         // limit moves by a degree with any change of the method, so a limit bound is the preset's worst over the four
-        // figures and four yaws (README: the presets) plus a margin, not this yaw's value. 4 s: at 3 s `exact`'s feet
+        // figures and four yaws (docs/methods.md: the presets) plus a margin, not this yaw's value. 4 s: at 3 s
+        // `exact`'s feet
         // were still settling.
         {"fast", preset("fast"), 0.025, 16, 0.005},           // measured 21.5 mm, 13.3°, 2.7 mm (4 × 4: 14°)
         {"iterative", preset("iterative"), 0.024, 13, 0.005}, // 19.9 mm, 10.0°, 2.7 mm (11°)

@@ -223,7 +223,7 @@ TEST_CASE("overlapping pairs: the AF guide's overlap figure's contradictory pair
           "[sim][stress]") {
     // "a" and "c" overlap 3 cm at the load pose and their ±2° hinges do not let them part: the asset finds the pair
     // (and only it), the methods exempt it, and the figure rests under the direct joint solve too (with the pair
-    // kept, exact's contact and tree step walked the figure 2.2 m in 30 s; README: Stability).
+    // kept, exact's contact and tree step walked the figure 2.2 m in 30 s; docs/stability.md).
     const sim::StressSetup setup = setupOf("overlap");
     REQUIRE(setup.figures.size() == 1);
     const figure::Figure& f = setup.figures[0];
