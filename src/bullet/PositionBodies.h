@@ -14,9 +14,11 @@ inline constexpr btScalar kAnchorToleranceM = btScalar(1e-4);
 inline constexpr btScalar kAngleToleranceRad = btScalar(2e-4);
 
 // One body as the pass sees it: immovable (world, static geometry, another figure's or a game's body) or a body
-// of this ragdoll, whose pose the pass works on locally and writes back once, at the end of the pass.
+// of this ragdoll, whose pose the pass works on locally and writes back once, at the end of the pass. A keyframed
+// body of this ragdoll (inverse mass 0) is immovable at its pose.
 struct Side {
     btRigidBody* body = nullptr; ///< null: immovable
+    bool placed = false;         ///< a body of this ragdoll, movable or not: its joints' frames move with x and q
     btVector3 x{0, 0, 0};        ///< centre of mass, world
     btQuaternion q = btQuaternion::getIdentity();
     btMatrix3x3 r = btMatrix3x3::getIdentity(); ///< rotation of q
@@ -36,15 +38,18 @@ struct Side {
 
 inline Side sideOf(btRigidBody* body) {
     Side s;
-    if (body == nullptr || body->getInvMass() == 0) return s;
-    s.body = body;
+    if (body == nullptr) return s;
+    s.placed = true;
     const btTransform& t = body->getCenterOfMassTransform();
     s.x = t.getOrigin();
     t.getBasis().getRotation(s.q);
-    s.invMass = body->getInvMass();
     s.x0 = s.x;
     s.q0 = s.q;
-    s.invInertiaLocal = body->getInvInertiaDiagLocal();
+    if (body->getInvMass() != 0) {
+        s.body = body;
+        s.invMass = body->getInvMass();
+        s.invInertiaLocal = body->getInvInertiaDiagLocal();
+    }
     s.updateRotation();
     return s;
 }
@@ -111,7 +116,7 @@ struct Frames {
     btTransform a, b;
 };
 inline Frames framesOf(const Side& a, const Side& b, const std::pair<btTransform, btTransform>& local) {
-    return {a.transform() * local.first, b.body ? b.transform() * local.second : local.second};
+    return {a.transform() * local.first, b.placed ? b.transform() * local.second : local.second};
 }
 
 } // namespace afb::bullet::detail::position

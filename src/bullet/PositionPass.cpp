@@ -319,7 +319,8 @@ class Pass {
 // The contacts' sides: this ragdoll's bodies by index, everything else immovable.
 Side* Pass::sideFor(const btCollisionObject* o) {
     for (std::size_t i = 0; i < m_bodies.size(); ++i)
-        if (static_cast<const btCollisionObject*>(&m_r.rigidBody(static_cast<int>(i))) == o) return &m_bodies[i];
+        if (static_cast<const btCollisionObject*>(&m_r.rigidBody(static_cast<int>(i))) == o)
+            return m_bodies[i].body ? &m_bodies[i] : nullptr; // a keyframed body: immovable, as static geometry
     return nullptr;
 }
 
@@ -389,8 +390,9 @@ bool Pass::buildTree() {
 // A joint's rows for the tree step: its anchor, and in mode 2 its locked axes and the limit rows past their limit.
 JointTree::Rows Pass::rowsOf(const JointTree::Joint& j) {
     const figure::FigureConstraint& c = m_f.constraints[static_cast<std::size_t>(j.constraint)];
-    Side& a = j.a >= 0 ? m_bodies[static_cast<std::size_t>(j.a)] : m_immovableA;
-    Side& b = j.b >= 0 ? m_bodies[static_cast<std::size_t>(j.b)] : m_world;
+    // The joint's bodies at their poses (a keyframed one is in the tree as immovable: index −1).
+    Side& a = m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body1))];
+    Side& b = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body2))] : m_world;
     const Frames fr = framesOf(a, b, m_r.rigidFramesLocal(j.constraint));
     JointTree::Rows rows;
     rows.anchorA = fr.a.getOrigin();
@@ -419,7 +421,7 @@ JointTree::Rows Pass::rowsOf(const JointTree::Joint& j) {
     }
     LimitRow limit[2];
     const int n = violatedLimitRows(c, fr, a.r * m_r.bodyInRigid(c.body1).getBasis(),
-                                    b.body ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis, limit);
+                                    b.placed ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis, limit);
     for (int i = 0; i < n; ++i)
         if (limit[i].excess > kAngleToleranceRad && rows.angular < 5) {
             rows.axis[rows.angular] = limit[i].axisWorld;
@@ -448,7 +450,7 @@ bool Pass::sweep() {
         };
         if (!std::holds_alternative<std::monostate>(c.limit))
             moved(projectLimit(a, b, c, frames, a.r * m_r.bodyInRigid(c.body1).getBasis(),
-                               b.body ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis));
+                               b.placed ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis));
         if (freedom.rotation == figure::RotationHold::All) moved(projectOrientation(a, b, frames));
         else if (freedom.rotation == figure::RotationHold::AllButAxis) moved(projectHingeAxis(a, b, frames));
         corrected = projectAnchor(a, b, frames, freedom.anchor == figure::AnchorHold::Line) || corrected;

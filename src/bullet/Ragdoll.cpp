@@ -389,6 +389,7 @@ void Ragdoll::thawBodies() {
         m_world.removeRigidBody(&b);
         b.setMassProps(static_cast<btScalar>(r.massKg), toBt(r.inertiaKgM2));
         b.updateInertiaTensor();
+        if (!m_keyframes.modes.empty()) applyRigidMode(i); // a keyframed rigid is kinematic again
         m_world.addRigidBody(&b, m_group, m_masks[i]);
         b.setSleepingThresholds(0, 0);
     }

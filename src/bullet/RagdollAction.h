@@ -58,7 +58,8 @@ class Ragdoll::Action : public btActionInterface {
         for (const Friction& f : frictions)
             f.constraint->setMaxImpulse(f.coefficientTimesLever * f.feedback->m_appliedForceBodyA.length() * dt);
         activeTime += dt;
-        if (m_comeToRest && restNow(dt)) m_owner.putToRest();
+        // Never at rest while a keyframed body moves, however slowly (its target is the game's, not the rules').
+        if (m_comeToRest && restNow(dt) && !m_owner.m_keyframes.moving) m_owner.putToRest();
     }
     void debugDraw(btIDebugDraw*) override {}
 
@@ -79,6 +80,7 @@ class Ragdoll::Action : public btActionInterface {
 
     void clampVelocities() {
         for (const auto& b : m_owner.m_bodies) {
+            if (b->isKinematicObject()) continue; // a keyframed body's velocity is its target's, not the solver's
             const btVector3 v = b->getLinearVelocity(), w = b->getAngularVelocity();
             const btScalar speed = v.length(), spin = w.length();
             if (clamp.maxLinearMps > 0 && speed > clamp.maxLinearMps)

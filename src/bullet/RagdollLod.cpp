@@ -84,6 +84,8 @@ void Ragdoll::relayout(const figure::LodLevel* level) {
     }
     addBodies();
     placeRigids(now);
+    if (!m_keyframes.modes.empty())
+        for (std::size_t k = 0; k < m_bodies.size(); ++k) applyRigidMode(k); // the new rigids of keyframed bodies
     compounds.clear();
     addConstraints();
     filterPairs();

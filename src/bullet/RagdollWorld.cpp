@@ -143,6 +143,9 @@ class RagdollWorld::PositionAction : public btActionInterface {
 
     void updateAction(btCollisionWorld* world, btScalar dt) override {
         if (m_owner.m_ragdolls.empty()) return;
+        // Keyframed bodies move with the simulated ones (Bullet does not integrate kinematic bodies), before the
+        // position pass measures the joints between them.
+        for (Ragdoll* r : m_owner.m_ragdolls) detail::RagdollWorldLink::advanceKeyframes(*r, dt);
         wakeTouched(world);
         const int iterations = m_owner.m_method.positionIterations;
         if (iterations > 0 || m_owner.m_method.positionTree > 0) positionPass(world, iterations, dt);
@@ -466,7 +469,10 @@ int RagdollWorld::substepsFor(double dtSeconds) const {
 }
 
 void RagdollWorld::step(double dtSeconds) {
-    for (Ragdoll* r : m_ragdolls) r->checkGuard(); // what the game wrote since the last step
+    for (Ragdoll* r : m_ragdolls) {
+        r->checkGuard(); // what the game wrote since the last step
+        detail::RagdollWorldLink::beginKeyframeStep(*r, dtSeconds);
+    }
     const int substeps = substepsFor(dtSeconds);
     m_lastSubsteps = substeps;
     // The step's first substep releases the manifolds that may name them; objects destroyed from now on (a sunk

@@ -4,8 +4,8 @@
 // members the other side needs:
 //   the ragdoll tells its world that it leaves (its destructor), that its explosion guard restored it, that a level
 //   of detail replaces its Bullet objects, and that a collision object of its (a sunk ragdoll's box) is destroyed;
-//   the world makes a ragdoll its member (RagdollWorld::spawn) and runs sinking: the calm-substep count, sink(),
-//   and which box stands for a sunk ragdoll.
+//   the world makes a ragdoll its member (RagdollWorld::spawn), runs sinking (the calm-substep count, sink(),
+//   and which box stands for a sunk ragdoll) and moves its keyframed bodies (before a step and after each substep).
 #include "afb/bullet/Ragdoll.h"
 #include "afb/bullet/RagdollWorld.h"
 
@@ -36,6 +36,10 @@ class RagdollWorldLink {
     static void sink(Ragdoll& ragdoll) { ragdoll.sink(); }
     /// The box that stands for the ragdoll while it is sunk, or null.
     static const btCollisionObject* sunkBox(const Ragdoll& ragdoll) { return ragdoll.m_restProxy.get(); }
+    /// A step of `seconds` begins: the keyframed bodies take the velocity that reaches their targets by its end.
+    static void beginKeyframeStep(Ragdoll& ragdoll, double seconds) { ragdoll.beginKeyframeStep(seconds); }
+    /// A substep of `dt` integrated the simulated bodies: the keyframed ones move too.
+    static void advanceKeyframes(Ragdoll& ragdoll, btScalar dt) { ragdoll.advanceKeyframes(dt); }
 };
 
 } // namespace afb::bullet::detail

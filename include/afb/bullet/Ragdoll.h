@@ -88,6 +88,12 @@ struct BodyVelocity {
     btVector3 angularRadps{0, 0, 0}; ///< angular velocity, rad/s, world
 };
 
+/// How a figure body moves (Ragdoll::setBodyMode; docs/motors.md, "Keyframed bodies and partial ragdolls").
+enum class BodyMode {
+    Simulated, ///< moved by the solver, limp or powered by its joints' motors (the default)
+    Keyframed, ///< follows the game's targets (Ragdoll::setKeyframeTargets); pushes, is never pushed back
+};
+
 /// Which impulses Ragdoll::applyBodyImpulse applies.
 enum class ImpulseRule {
     EngineThreshold, ///< as the engine: below the wake threshold (Ragdoll::impulseThresholdNs) nothing happens
@@ -336,6 +342,26 @@ class Ragdoll {
     [[nodiscard]] bool hit(int body, const btVector3& impulse, const btVector3& worldPoint,
                            const HitReaction& reaction = {});
 
+    /// Sets figure body `body`'s mode (docs/motors.md, "Keyframed bodies and partial ragdolls"). Keyframed, the body
+    /// is moved by the velocity that takes it to its target over each RagdollWorld::step: contacts and its joints
+    /// act on its neighbours, nothing acts on it. It holds its current pose until setKeyframeTargets gives it
+    /// another. Back to Simulated, it keeps its pose and the velocity of its last keyframed step. A rigid body that
+    /// carries several figure bodies (Method::mergeFixed, setLod) is keyframed while any of them is, and follows
+    /// the target of the first of them in body order. Rigid backend spawned through a RagdollWorld only: false,
+    /// changing nothing, otherwise or for a body out of range.
+    [[nodiscard]] bool setBodyMode(int body, BodyMode mode);
+    /// The mode figure body `body` was given (Simulated for a body out of range).
+    BodyMode bodyMode(int body) const;
+    /// Whether rigid body `k` (rigidBodyCount) is keyframed: one of the figure bodies it carries is.
+    bool rigidKeyframed(int k) const { return keyframeSource(static_cast<std::size_t>(k)) >= 0; }
+    /// Sets the keyframe targets: one state per body (body order, world body frames, as bodyStates() gives them,
+    /// e.g. figure::bodyStatesFromAnimation of the next frame); the keyframed bodies reach theirs at the end of
+    /// the next RagdollWorld::step, moving at the constant velocity that takes them there (the states' velocities
+    /// are not used). The next step wakes a ragdoll at rest whose keyframed bodies have a target away from their
+    /// pose. False, changing nothing, where setBodyMode would refuse, when the number of states is not
+    /// bodyCount() or a state is not finite.
+    [[nodiscard]] bool setKeyframeTargets(std::span<const figure::BodyState> targets);
+
     /// True while the figure is at rest by its own rules (docs/format.md §6.1). Spawned through a RagdollWorld, its
     /// bodies are then frozen (frozen()); in a plain world they are asleep in Bullet.
     bool atRest() const;
@@ -402,6 +428,12 @@ class Ragdoll {
     // What the RagdollWorld that spawned it reaches (spawn, sinking): src/bullet/RagdollWorldLink.h, the one way in.
     friend class detail::RagdollWorldLink;
     void sink(); ///< frozen → out of the world behind one box (sunk())
+    // Keyframed bodies (src/bullet/RagdollKeyframes.cpp).
+    bool keyframesAllowed() const { return !m_multibody && m_manager != nullptr; }
+    int keyframeSource(std::size_t rigid) const; ///< the figure body whose target a rigid follows, or −1
+    void applyRigidMode(std::size_t rigid);      ///< kinematic or dynamic, as its bodies' modes say
+    void beginKeyframeStep(double stepSeconds);  ///< before a RagdollWorld::step: each rigid's velocity to its target
+    void advanceKeyframes(btScalar dt);          ///< after each substep's integration: the keyframed rigids move
 
     void requireRigid(const char* accessor) const; ///< throws std::logic_error for a multibody ragdoll
     btRigidBody& other(int body2) const;
@@ -450,6 +482,17 @@ class Ragdoll {
     std::vector<JointMotorConstraint*> m_motors; ///< per figure constraint, null where none (owned by m_arena)
     double m_motorStrength = 1;                  ///< setMotorStrength, lowered by a hit
     double m_regainPerSecond = 0;                ///< the strength's rise per simulated second after a hit (0: none)
+    /// Keyframed bodies: each figure body's mode and target, and the step that moves the keyframed rigids.
+    struct Keyframes {
+        std::vector<BodyMode> modes;            ///< per figure body; empty while every body is simulated
+        std::vector<figure::BodyState> targets; ///< per figure body, world
+        std::vector<btVector3> linear, angular; ///< per rigid: the velocity that reaches its target, m/s and rad/s
+        int keyframed = 0;                      ///< how many figure bodies are keyframed
+        double stepSeconds = 0;                 ///< the step under way (RagdollWorld::step), s
+        double elapsedSeconds = 0;              ///< of it, simulated so far, s
+        bool moving = false;                    ///< a keyframed rigid moves in the step under way
+    };
+    Keyframes m_keyframes;
 };
 
 } // namespace afb::bullet
