@@ -178,7 +178,7 @@ TEST_CASE("jointWeightsFromBodies: each body's weight reaches exactly the joints
     }
 }
 
-TEST_CASE("jointWeightsFromBodies: a joint no body contains moves with its parent; an uncontained root with body 0",
+TEST_CASE("jointWeightsFromBodies: a joint no body contains moves with its parent, an uncontained root with body 0",
           "[pose][blend]") {
     // origin → top → arm → tip: "top" contains top only, "arm" contains arm only; origin and tip are nobody's.
     const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
