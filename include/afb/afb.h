@@ -31,5 +31,7 @@
 #include "afb/figure/Load.h"
 #include "afb/figure/Placement.h"
 #include "afb/figure/Stabilize.h"
+#include "afb/pose/Blend.h"
+#include "afb/pose/GetUp.h"
 #include "afb/pose/SkeletonDriver.h"
 #include "afb/text/Diagnostics.h"

@@ -13,9 +13,10 @@ namespace afb::pose {
 /// The figure layer's rigid transform; every pose here is in metres.
 using figure::Transform;
 
-/// A driven skeleton, metres.
+/// A skeleton pose, metres: a driven one (driveSkeleton), an animated one (Blend.h: animatedPose, poseFromJoints) or
+/// a blend of the two (blendPoses).
 struct SkeletonPose {
-    Transform entity;             ///< model space to world: follows body 0 rigidly (docs/format.md §5.1 step 1)
+    Transform entity; ///< model space to world; driveSkeleton's follows body 0 rigidly (docs/format.md §5.1 step 1)
     std::vector<Transform> model; ///< every md5 joint in model space
     std::vector<Transform> local; ///< every md5 joint relative to its parent (the root: model space)
 
