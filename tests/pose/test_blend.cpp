@@ -10,6 +10,7 @@
 
 #include "EntityFixture.h"
 #include "FigureFixture.h"
+#include "PoseEqual.h"
 #include "afb/figure/Placement.h"
 #include "afb/pose/Blend.h"
 
@@ -28,15 +29,7 @@ Eigen::Matrix3d turn(double angle, const Eigen::Vector3d& axis) {
     return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
 }
 
-bool sameBits(const Transform& a, const Transform& b) { return a.rotation == b.rotation && a.position == b.position; }
-
-bool sameBits(const SkeletonPose& a, const SkeletonPose& b) {
-    if (!sameBits(a.entity, b.entity) || a.model.size() != b.model.size() || a.local.size() != b.local.size())
-        return false;
-    for (std::size_t j = 0; j < a.model.size(); ++j)
-        if (!sameBits(a.model[j], b.model[j]) || !sameBits(a.local[j], b.local[j])) return false;
-    return true;
-}
+using afb::test::bitEqual;
 
 afb::decl::Md5Anim loadWalk() {
     afb::text::Diagnostics diags;
@@ -95,20 +88,20 @@ TEST_CASE("interpolate takes the shorter arc across ±180° and is exact at its 
     CHECK((half.position - Eigen::Vector3d(2, -1, 2)).norm() < 1e-15);
     const Transform quarter = afb::pose::interpolate(a, b, 0.25);
     CHECK(angleBetween(quarter.rotation, turn(175.0 * kPi / 180, Eigen::Vector3d::UnitZ())) < 1e-12);
-    CHECK(sameBits(afb::pose::interpolate(a, b, 0.0), a));
-    CHECK(sameBits(afb::pose::interpolate(a, b, 1.0), b));
+    CHECK(bitEqual(afb::pose::interpolate(a, b, 0.0), a));
+    CHECK(bitEqual(afb::pose::interpolate(a, b, 1.0), b));
 }
 
 TEST_CASE("blendPoses: weight 0 is the animated pose and weight 1 the simulated pose, bit for bit", "[pose][blend]") {
     const TwoPoses p;
     const std::size_t n = p.animated.model.size();
-    CHECK(sameBits(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 0.0)), p.animated));
-    CHECK(sameBits(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 1.0)), p.simulated));
+    CHECK(bitEqual(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 0.0)), p.animated));
+    CHECK(bitEqual(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 1.0)), p.simulated));
     // Out-of-range weights clamp to the ends.
-    CHECK(sameBits(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, -3.0)), p.animated));
-    CHECK(sameBits(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 7.0)), p.simulated));
+    CHECK(bitEqual(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, -3.0)), p.animated));
+    CHECK(bitEqual(afb::pose::blendPoses(p.f, p.animated, p.simulated, std::vector<double>(n, 7.0)), p.simulated));
     // The poses differ: the test above compares something.
-    CHECK(!sameBits(p.animated, p.simulated));
+    CHECK(!bitEqual(p.animated, p.simulated));
 }
 
 TEST_CASE("blendPoses: weight 0.5 turns every joint halfway locally and moves the pelvis halfway in the world",
@@ -174,7 +167,7 @@ TEST_CASE("jointWeightsFromBodies: each body's weight reaches exactly the joints
     for (std::size_t j = 0; j < w.size(); ++j) {
         INFO("joint " << p.f.skeleton.name(static_cast<int>(j)));
         const bool inArm = std::find(mine.begin(), mine.end(), static_cast<int>(j)) != mine.end();
-        CHECK(sameBits(blend.local[j], inArm ? p.simulated.local[j] : p.animated.local[j]));
+        CHECK(bitEqual(blend.local[j], inArm ? p.simulated.local[j] : p.animated.local[j]));
     }
 }
 

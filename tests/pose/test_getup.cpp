@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "EntityFixture.h"
+#include "PoseEqual.h"
 #include "afb/bullet/Ragdoll.h"
 #include "afb/figure/Placement.h"
 #include "afb/pose/Blend.h"
@@ -38,15 +39,7 @@ double angleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     return Eigen::AngleAxisd(a.transpose() * b).angle();
 }
 
-bool sameBits(const Transform& a, const Transform& b) { return a.rotation == b.rotation && a.position == b.position; }
-
-bool sameBits(const SkeletonPose& a, const SkeletonPose& b) {
-    if (!sameBits(a.entity, b.entity) || a.model.size() != b.model.size() || a.local.size() != b.local.size())
-        return false;
-    for (std::size_t j = 0; j < a.model.size(); ++j)
-        if (!sameBits(a.model[j], b.model[j]) || !sameBits(a.local[j], b.local[j])) return false;
-    return true;
-}
+using afb::test::bitEqual;
 
 std::size_t jointOf(const Figure& f, const char* name) {
     const auto j = f.skeleton.findJoint(name);
@@ -128,8 +121,8 @@ TEST_CASE("lyingSide: the humanoid dropped on its back lies face-up, on its fron
     CHECK(fromBack.side == LyingSide::FaceUp);
     CHECK(fromFront.side == LyingSide::FaceDown);
     for (std::size_t j = 0; j < up.size(); ++j) {
-        CHECK(sameBits(fromBack.to.model[j], up[j]));
-        CHECK(sameBits(fromFront.to.model[j], down[j]));
+        CHECK(bitEqual(fromBack.to.model[j], up[j]));
+        CHECK(bitEqual(fromFront.to.model[j], down[j]));
     }
 }
 
@@ -172,11 +165,11 @@ TEST_CASE("getUpPose: the snapshot at the start, the placed frame at the end, bi
     const SkeletonPose snapshot = restedSnapshot(loaded, kOnBack, 0.8);
     const std::vector<Transform> up = lyingFrame(f, kOnBack, 0.1), down = lyingFrame(f, kOnFront, 0.1);
     const afb::pose::GetUp plan = afb::pose::planGetUp(f, snapshot, up, down, {.blendSeconds = 0.75});
-    CHECK(sameBits(afb::pose::getUpPose(plan, 0.0), snapshot));
-    CHECK(sameBits(afb::pose::getUpPose(plan, -1.0), snapshot));
+    CHECK(bitEqual(afb::pose::getUpPose(plan, 0.0), snapshot));
+    CHECK(bitEqual(afb::pose::getUpPose(plan, -1.0), snapshot));
     const SkeletonPose end = afb::pose::getUpPose(plan, 0.75);
-    CHECK(sameBits(end, afb::pose::poseFromJoints(f, plan.alignment, up)));
-    CHECK(sameBits(afb::pose::getUpPose(plan, 3.0), end));
+    CHECK(bitEqual(end, afb::pose::poseFromJoints(f, plan.alignment, up)));
+    CHECK(bitEqual(afb::pose::getUpPose(plan, 3.0), end));
 
     // The end pose is the frame under the alignment, with its pelvis where the ragdoll's lies.
     const std::vector<Transform> world = end.world();
