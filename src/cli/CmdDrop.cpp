@@ -144,9 +144,13 @@ void printTable(std::FILE* out, const std::vector<sim::DropResult>& results, con
 
 // --json and --csv: to their files, or to stdout for '-'.
 void writeReports(const DropCli& opt, const std::vector<sim::DropResult>& results, double gravityMps2) {
-    nlohmann::json all = {{"bullet", sim::bulletVersion()}, {"precision", sim::bulletPrecision()},
-                          {"gravity_mps2", gravityMps2},    {"threads", opt.drop.threads > 0 ? opt.drop.threads : 1},
-                          {"worlds", opt.drop.worlds},      {"scenario", sim::dropOptionsJson(opt.drop)},
+    nlohmann::json all = {{"schema", sim::schemaJson(sim::kDropSchema)},
+                          {"bullet", sim::bulletVersion()},
+                          {"precision", sim::bulletPrecision()},
+                          {"gravity_mps2", gravityMps2},
+                          {"threads", opt.drop.threads > 0 ? opt.drop.threads : 1},
+                          {"worlds", opt.drop.worlds},
+                          {"scenario", sim::dropOptionsJson(opt.drop)},
                           {"runs", nlohmann::json::array()}};
     for (const sim::DropResult& r : results) all["runs"].push_back(sim::dropResultJson(r));
     if (opt.json == "-") std::cout << all.dump(2) << "\n";

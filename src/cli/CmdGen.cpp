@@ -10,6 +10,7 @@
 #include "Commands.h"
 #include "Usage.h"
 #include "afb/gen/Generate.h"
+#include "afb/sim/Report.h"
 
 namespace afb::cli {
 namespace {
@@ -119,7 +120,8 @@ int runGen(const GenCliOptions& opt) {
                               {"role", j.role},
                               {"body1", generated->bodies[static_cast<std::size_t>(j.body1)].name},
                               {"body2", generated->bodies[static_cast<std::size_t>(j.body2)].name}});
-        std::cout << nlohmann::json{{"name", generated->name},
+        std::cout << nlohmann::json{{"schema", sim::schemaJson(sim::kGenSchema)},
+                                    {"name", generated->name},
                                     {"totalMassKg", generated->totalMassKg},
                                     {"files", {paths.af, paths.def, paths.mesh, paths.afPose}},
                                     {"units", unitsJson(rig->units)},

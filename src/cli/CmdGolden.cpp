@@ -84,7 +84,8 @@ struct Record {
 nlohmann::json goldenJson(const Record& rec, const Run& run) {
     const std::filesystem::path goldenDir = std::filesystem::absolute(rec.out).parent_path();
     const sim::DropResult& r = *run.result;
-    return {{"entity", rec.entity},
+    return {{"schema", sim::schemaJson(sim::kGoldenSchema)},
+            {"entity", rec.entity},
             {"base", std::filesystem::relative(std::filesystem::absolute(rec.base), goldenDir).generic_string()},
             {"inputs", inputHashes(*run.resolved, std::filesystem::absolute(rec.base))},
             {"options", sim::dropOptionsJson(rec.drop)},
@@ -163,6 +164,10 @@ std::optional<Golden> readGolden(const std::filesystem::path& file, bool ignoreI
     if (!data || g.is_discarded() || !g.contains("pose")) {
         for (const text::Diagnostic& d : diags.items()) out.errors.push_back(d.str());
         out.errors.push_back(file.string() + ": error: not a golden file");
+        return std::nullopt;
+    }
+    if (const std::string wrong = sim::checkSchema(g, sim::kGoldenSchema); !wrong.empty()) {
+        out.errors.push_back(file.string() + ": error: " + wrong);
         return std::nullopt;
     }
     out.entity = g.at("entity").get<std::string>();

@@ -6,6 +6,7 @@
 #include "Usage.h"
 #include "afb/detail/DoomMath.h"
 #include "afb/figure/Load.h"
+#include "afb/sim/Report.h"
 
 namespace afb::cli {
 namespace {
@@ -161,6 +162,7 @@ void addInspectCommand(CLI::App& app, int& exitCode) {
         if (opt->json) {
             nlohmann::json j = loaded ? figureJson(loaded->figure) : nlohmann::json::object();
             j["findings"] = diagnosticsJson(diags);
+            j["schema"] = sim::schemaJson(sim::kInspectSchema);
             std::cout << j.dump(2) << "\n";
         } else if (loaded) {
             printFigure(loaded->figure);

@@ -12,6 +12,7 @@
 #include "Usage.h"
 #include "afb/bullet/Method.h"
 #include "afb/sim/RawRagdoll.h"
+#include "afb/sim/Report.h"
 
 namespace afb::cli {
 namespace {
@@ -90,15 +91,19 @@ void addMethodsCommand(CLI::App& app, int& exitCode) {
     cmd->add_flag("--json", *json, "As JSON on stdout");
     cmd->callback([name, json, &exitCode] {
         if (name->empty()) {
-            if (*json) std::printf("%s\n", overviewJson().dump(2).c_str());
-            else printOverview();
+            if (*json) {
+                nlohmann::json j = overviewJson();
+                j["schema"] = sim::schemaJson(sim::kMethodsSchema);
+                std::printf("%s\n", j.dump(2).c_str());
+            } else printOverview();
             exitCode = 0;
             return;
         }
         const auto method = sim::methodByName(*name);
         if (!method) usageError(unknownName("method", *name, methodNameList()));
         if (*json)
-            std::printf("%s\n", nlohmann::json{{"name", *name},
+            std::printf("%s\n", nlohmann::json{{"schema", sim::schemaJson(sim::kMethodSchema)},
+                                               {"name", *name},
                                                {"summary", presetSummary(*name)},
                                                {"knobs", knobsJson(*method)}}
                                     .dump(2)

@@ -7,6 +7,7 @@
 #include "afb/decl/Def.h"
 #include "afb/decl/Md5Anim.h"
 #include "afb/decl/Md5Mesh.h"
+#include "afb/sim/Report.h"
 
 namespace afb::cli {
 namespace {
@@ -91,6 +92,7 @@ void addParseCommand(CLI::App& app, int& exitCode) {
             if (diags.hasErrors()) exitCode = 1;
             if (opt->json) {
                 j.update(diagnosticsJson(diags));
+                j["schema"] = sim::schemaJson(sim::kParseSchema);
                 std::cout << j.dump() << "\n";
             }
         }

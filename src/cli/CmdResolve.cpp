@@ -3,6 +3,7 @@
 
 #include "Commands.h"
 #include "afb/decl/Library.h"
+#include "afb/sim/Report.h"
 
 namespace afb::cli {
 
@@ -34,7 +35,8 @@ void addResolveCommand(CLI::App& app, int& exitCode) {
             return;
         }
         if (opt->json) {
-            const nlohmann::json j = {{"entity", r->entityName},
+            const nlohmann::json j = {{"schema", sim::schemaJson(sim::kResolveSchema)},
+                                      {"entity", r->entityName},
                                       {"entityChain", r->entityChain},
                                       {"model", r->modelName},
                                       {"modelChain", r->modelChain},

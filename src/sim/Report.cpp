@@ -90,6 +90,23 @@ std::string csvCell(const json& v) {
 
 } // namespace
 
+nlohmann::json schemaJson(const ReportSchema& schema) { return {{"name", schema.name}, {"version", schema.version}}; }
+
+std::string checkSchema(const nlohmann::json& document, const ReportSchema& schema) {
+    if (!document.is_object() || !document.contains("schema")) return {};
+    const nlohmann::json& s = document["schema"];
+    if (!s.is_object() || !s.contains("name") || !s["name"].is_string() || !s.contains("version") ||
+        !s["version"].is_number_integer())
+        return "\"schema\" is not {\"name\": …, \"version\": …}";
+    const std::string name = s["name"].get<std::string>();
+    if (name != schema.name) return "a " + name + " document, not " + std::string(schema.name);
+    const auto version = s["version"].get<long long>();
+    if (version > schema.version || version < 1)
+        return std::string(schema.name) + " version " + std::to_string(version) + ": this afb reads up to version " +
+               std::to_string(schema.version);
+    return {};
+}
+
 json methodJson(const bullet::Method& m) {
     json j = {{"name", m.name}};
     for (const bullet::MethodKnob& k : bullet::methodKnobs()) {

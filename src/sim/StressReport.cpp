@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "StressText.h"
+#include "afb/sim/Report.h"
 #include "afb/sim/Stress.h"
 
 namespace afb::sim {
@@ -178,6 +179,7 @@ std::string stressJson(const std::vector<StressResult>& results, const std::vect
                        const StressThresholds& th) {
     const std::vector<StressCell> cells = stressCells(results);
     nlohmann::ordered_json j;
+    j["schema"] = schemaJson(kStressSchema);
     j["bullet"] = bulletVersion();
     j["precision"] = bulletPrecision();
     j["yaws"] = yawCount(cells);

@@ -155,6 +155,10 @@ afb_cli_test(drop_raw_technique 2 ARGS drop --base . chain --method raw --specul
 add_test(NAME cli.drop_report_stdout
   COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
           "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/drop_report_stdout" -P ${CMAKE_CURRENT_LIST_DIR}/streams.cmake)
+# Every JSON report names its schema and version; golden compare refuses a newer one.
+add_test(NAME cli.report_schemas
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/report_schemas" -P ${CMAKE_CURRENT_LIST_DIR}/schemas.cmake)
 # Exit codes: 0 success, 1 a failed check or bad input, 2 a command line that makes no sense; misspelt names get
 # the nearest valid one.
 afb_cli_test(exit_success 0 ARGS drop --base . chain --steps 5 MATCH "chain +10 +5 ")

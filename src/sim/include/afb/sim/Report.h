@@ -12,6 +12,29 @@
 
 namespace afb::sim {
 
+/// What a JSON report of afb is: its name ("afbullet-drop", …) and the version of its fields. Every JSON document a
+/// command writes for people's tools carries it as "schema": {"name": …, "version": …}; the version grows when a
+/// field changes its meaning, unit or type, or goes away (a new field does not change it). docs/cli.md lists them.
+struct ReportSchema {
+    std::string_view name;
+    int version;
+};
+inline constexpr ReportSchema kDropSchema{"afbullet-drop", 1};       ///< afb drop --json
+inline constexpr ReportSchema kStressSchema{"afbullet-stress", 1};   ///< afb stress's stress.json
+inline constexpr ReportSchema kGoldenSchema{"afbullet-golden", 1};   ///< afb golden record's files
+inline constexpr ReportSchema kInspectSchema{"afbullet-inspect", 1}; ///< afb inspect --json
+inline constexpr ReportSchema kResolveSchema{"afbullet-resolve", 1}; ///< afb resolve --json
+inline constexpr ReportSchema kParseSchema{"afbullet-parse", 1};     ///< afb parse --json (each line)
+inline constexpr ReportSchema kGenSchema{"afbullet-gen", 1};         ///< afb gen --json
+inline constexpr ReportSchema kMethodsSchema{"afbullet-methods", 1}; ///< afb methods --json
+inline constexpr ReportSchema kMethodSchema{"afbullet-method", 1};   ///< afb methods NAME --json
+
+/// {"name": …, "version": …}, the value of a report's "schema" member.
+nlohmann::json schemaJson(const ReportSchema& schema);
+/// Whether a document read back (a golden file) can be read as `schema`: its "schema" names it at this version or
+/// an older one, or it has no "schema" (written before reports carried one: version 1). Else an error message.
+std::string checkSchema(const nlohmann::json& document, const ReportSchema& schema);
+
 /// The method as JSON: {"name": …, "<knob>": value, …} (numbers as numbers, flags as booleans, enums as text).
 nlohmann::json methodJson(const bullet::Method& method);
 /// Reads a method written by methodJson: starts from the named preset (or the default) and applies every knob
