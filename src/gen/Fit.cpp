@@ -145,123 +145,152 @@ double fittedHeight(const Rig& rig, const VertexMask& stray) {
     return std::max(extentOf(points), 1e-6);
 }
 
-std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray) {
-    const int n = static_cast<int>(rig.joints.size());
-    const double height = fittedHeight(rig, stray);
-    const auto mergeRe = compile(rules.merge);
-    const auto keepRe = compile(rules.keep);
-    const auto skipRe = compile(rules.skip);
+namespace {
 
-    // Each vertex counts for the joint that weighs it most.
-    std::vector<std::vector<Eigen::Vector3d>> owned(static_cast<std::size_t>(n));
-    std::vector<bool> skipped(static_cast<std::size_t>(n), false);
-    for (int j = 0; j < n; ++j)
-        skipped[static_cast<std::size_t>(j)] = matchesAny(skipRe, rig.joints[static_cast<std::size_t>(j)].name);
-    std::size_t vertexCount = 0;
+// Each vertex counts for the joint that weighs it most, unless that joint is skipped or the vertex is stray.
+struct Ownership {
+    std::vector<std::vector<Eigen::Vector3d>> owned; // per joint, the positions of the vertices it owns
+    std::vector<bool> skipped;                       // per joint, matched by the rules' skip list
+    std::size_t vertexCount = 0;                     // vertices that are not stray
+};
+
+Ownership ownVertices(const Rig& rig, const std::vector<std::regex>& skipRe, const VertexMask& stray) {
+    const std::size_t n = rig.joints.size();
+    Ownership out;
+    out.owned.resize(n);
+    out.skipped.assign(n, false);
+    for (std::size_t j = 0; j < n; ++j) out.skipped[j] = matchesAny(skipRe, rig.joints[j].name);
     for (std::size_t si = 0; si < rig.surfaces.size(); ++si)
         for (std::size_t vi = 0; vi < rig.surfaces[si].vertices.size(); ++vi) {
             const RigVertex& v = rig.surfaces[si].vertices[vi];
             if (stray[si][vi]) continue;
-            ++vertexCount;
+            ++out.vertexCount;
             const auto top =
                 std::max_element(v.influences.begin(), v.influences.end(),
                                  [](const RigInfluence& a, const RigInfluence& b) { return a.weight < b.weight; });
-            if (top != v.influences.end() && !skipped[static_cast<std::size_t>(top->joint)])
-                owned[static_cast<std::size_t>(top->joint)].push_back(v.position);
+            if (top != v.influences.end() && !out.skipped[static_cast<std::size_t>(top->joint)])
+                out.owned[static_cast<std::size_t>(top->joint)].push_back(v.position);
         }
-    const int minVertices =
-        std::max(rules.minVertices,
-                 static_cast<int>(std::ceil(rules.minVertexFraction * static_cast<double>(vertexCount))));
+    return out;
+}
 
-    // group[j]: the joint heading j's body. Named merges first (parents before children) …
-    std::vector<int> group(static_cast<std::size_t>(n));
-    std::vector<bool> kept(static_cast<std::size_t>(n), false);
-    for (int j = 0; j < n; ++j) {
-        const std::string& name = rig.joints[static_cast<std::size_t>(j)].name;
-        const int parent = rig.joints[static_cast<std::size_t>(j)].parent;
-        kept[static_cast<std::size_t>(j)] = matchesAny(keepRe, name);
-        group[static_cast<std::size_t>(j)] = j;
-        if (parent >= 0 && !kept[static_cast<std::size_t>(j)] &&
-            (matchesAny(mergeRe, name) || skipped[static_cast<std::size_t>(j)]))
-            group[static_cast<std::size_t>(j)] = group[static_cast<std::size_t>(parent)];
-    }
-    const auto pointsOf = [&](int head) {
+// Which joint heads each joint's body (group[j]), as the rules and the sizes decide before fitting.
+struct Grouping {
+    const Rig& rig;
+    const Ownership& own;
+    std::vector<int> group;
+    std::vector<bool> kept; // per joint, matched by the rules' keep list: heads its own body whatever its size
+
+    int joints() const { return static_cast<int>(group.size()); }
+    int parentOf(int j) const { return rig.joints[static_cast<std::size_t>(j)].parent; }
+    std::vector<Eigen::Vector3d> pointsOf(int head) const {
         std::vector<Eigen::Vector3d> pts;
-        for (int j = 0; j < n; ++j)
+        for (int j = 0; j < joints(); ++j)
             if (group[static_cast<std::size_t>(j)] == head)
-                pts.insert(pts.end(), owned[static_cast<std::size_t>(j)].begin(),
-                           owned[static_cast<std::size_t>(j)].end());
+                pts.insert(pts.end(), own.owned[static_cast<std::size_t>(j)].begin(),
+                           own.owned[static_cast<std::size_t>(j)].end());
         return pts;
-    };
-    const auto mergeInto = [&](int from, int into) {
+    }
+    void mergeInto(int from, int into) {
         for (int& g : group)
             if (g == from) g = into;
-    };
-    // … then small groups into their parent's, children before parents so that what they gather counts. A group's
-    // size is the larger of its vertices' extent and its bone's length (head to the farthest joint below it).
-    const auto boneLength = [&](int head) {
+    }
+    // Head to the farthest joint below it in its group.
+    double boneLength(int head) const {
         double length = 0;
-        for (int j = head + 1; j < n; ++j) {
-            const int parent = rig.joints[static_cast<std::size_t>(j)].parent;
+        for (int j = head + 1; j < joints(); ++j) {
+            const int parent = parentOf(j);
             if (parent >= 0 && group[static_cast<std::size_t>(parent)] == head)
                 length = std::max(length, (rig.joints[static_cast<std::size_t>(j)].bind.position -
                                            rig.joints[static_cast<std::size_t>(head)].bind.position)
                                               .norm());
         }
         return length;
-    };
-    for (int j = n - 1; j >= 1; --j) {
-        if (group[static_cast<std::size_t>(j)] != j || kept[static_cast<std::size_t>(j)]) continue;
-        const auto pts = pointsOf(j);
-        if (static_cast<int>(pts.size()) < minVertices ||
-            std::max(extentOf(pts), boneLength(j)) < rules.minBodyFraction * height)
-            mergeInto(j, group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)]);
     }
-    // The base body holds joint 0; while it has too few vertices it takes in the child group with the most vertices
-    // (the pelvis: Doom's base body, docs/format.md §2.4).
-    while (static_cast<int>(pointsOf(0).size()) < std::max(minVertices, 1)) {
+};
+
+// Named merges first (parents before children), then small groups into their parent's, children before parents so
+// that what they gather counts (a group's size is the larger of its vertices' extent and its bone's length), then
+// the base body (joint 0's) takes in its largest child group while it has too few vertices (the pelvis: Doom's base
+// body, docs/format.md §2.4).
+Grouping groupJoints(const Rig& rig, const GenRules& rules, const Ownership& own, double height) {
+    const auto mergeRe = compile(rules.merge);
+    const auto keepRe = compile(rules.keep);
+    const int n = static_cast<int>(rig.joints.size());
+    Grouping g{rig, own, std::vector<int>(static_cast<std::size_t>(n)), std::vector<bool>(static_cast<std::size_t>(n))};
+    for (int j = 0; j < n; ++j) {
+        const std::string& name = rig.joints[static_cast<std::size_t>(j)].name;
+        const int parent = g.parentOf(j);
+        g.kept[static_cast<std::size_t>(j)] = matchesAny(keepRe, name);
+        g.group[static_cast<std::size_t>(j)] = j;
+        if (parent >= 0 && !g.kept[static_cast<std::size_t>(j)] &&
+            (matchesAny(mergeRe, name) || own.skipped[static_cast<std::size_t>(j)]))
+            g.group[static_cast<std::size_t>(j)] = g.group[static_cast<std::size_t>(parent)];
+    }
+    const int minVertices =
+        std::max(rules.minVertices,
+                 static_cast<int>(std::ceil(rules.minVertexFraction * static_cast<double>(own.vertexCount))));
+    for (int j = n - 1; j >= 1; --j) {
+        if (g.group[static_cast<std::size_t>(j)] != j || g.kept[static_cast<std::size_t>(j)]) continue;
+        const auto pts = g.pointsOf(j);
+        if (static_cast<int>(pts.size()) < minVertices ||
+            std::max(extentOf(pts), g.boneLength(j)) < rules.minBodyFraction * height)
+            g.mergeInto(j, g.group[static_cast<std::size_t>(g.parentOf(j))]);
+    }
+    while (static_cast<int>(g.pointsOf(0).size()) < std::max(minVertices, 1)) {
         int bestChild = -1;
         std::size_t bestCount = 0;
         for (int j = 1; j < n; ++j)
-            if (group[static_cast<std::size_t>(j)] == j &&
-                group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(j)].parent)] == 0) {
-                const std::size_t count = pointsOf(j).size();
+            if (g.group[static_cast<std::size_t>(j)] == j && g.group[static_cast<std::size_t>(g.parentOf(j))] == 0) {
+                const std::size_t count = g.pointsOf(j).size();
                 if (bestChild < 0 || count > bestCount) {
                     bestChild = j;
                     bestCount = count;
                 }
             }
         if (bestChild < 0) break;
-        mergeInto(bestChild, 0);
+        g.mergeInto(bestChild, 0);
     }
+    return g;
+}
 
+// The body whose volume is smallest against its neighbours, when under minVolumeRatio (−1: none). Against its
+// parent, when everything hanging from it is small too (a leaf, a braid of helper bones); a link between two large
+// bodies against the smaller of them (a thin waist between pelvis and chest).
+int smallestBody(const std::vector<BodyFit>& bodies, const std::vector<bool>& kept, double minVolumeRatio) {
+    int worst = -1;
+    double worstRatio = minVolumeRatio;
+    for (std::size_t i = 1; i < bodies.size(); ++i) {
+        const BodyFit& b = bodies[i];
+        if (b.parentBody < 0 || kept[static_cast<std::size_t>(b.head)]) continue;
+        const double parentVolume = bodies[static_cast<std::size_t>(b.parentBody)].volume;
+        double largestChild = 0;
+        for (const BodyFit& c : bodies)
+            if (c.parentBody == static_cast<int>(i)) largestChild = std::max(largestChild, c.volume);
+        double ratio = std::numeric_limits<double>::infinity();
+        if (largestChild < minVolumeRatio * parentVolume) ratio = b.volume / std::max(parentVolume, 1e-12);
+        if (largestChild > 0) ratio = std::min(ratio, b.volume / std::max(std::min(parentVolume, largestChild), 1e-12));
+        if (ratio < worstRatio) {
+            worstRatio = ratio;
+            worst = static_cast<int>(i);
+        }
+    }
+    return worst;
+}
+
+} // namespace
+
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray) {
+    const Ownership own = ownVertices(rig, compile(rules.skip), stray);
+    Grouping grouping = groupJoints(rig, rules, own, fittedHeight(rig, stray));
     // Fit, then merge the body of least relative volume into its parent while that ratio is under minVolumeRatio
     // (the figure layer warns from 10:1 mass ratios across a joint; one density makes mass ratios volume ratios).
     for (;;) {
-        std::vector<BodyFit> bodies = fitGroups(rig, rules, group, skipped, owned, stray);
-        int worst = -1;
-        double worstRatio = rules.minVolumeRatio;
-        for (std::size_t i = 1; i < bodies.size(); ++i) {
-            const BodyFit& b = bodies[i];
-            if (b.parentBody < 0 || kept[static_cast<std::size_t>(b.head)]) continue;
-            // Against its parent, when everything hanging from it is small too (a leaf, a braid of helper bones);
-            // a link between two large bodies against the smaller of them (a thin waist between pelvis and chest).
-            const double parentVolume = bodies[static_cast<std::size_t>(b.parentBody)].volume;
-            double largestChild = 0;
-            for (const BodyFit& c : bodies)
-                if (c.parentBody == static_cast<int>(i)) largestChild = std::max(largestChild, c.volume);
-            double ratio = std::numeric_limits<double>::infinity();
-            if (largestChild < rules.minVolumeRatio * parentVolume) ratio = b.volume / std::max(parentVolume, 1e-12);
-            if (largestChild > 0)
-                ratio = std::min(ratio, b.volume / std::max(std::min(parentVolume, largestChild), 1e-12));
-            if (ratio < worstRatio) {
-                worstRatio = ratio;
-                worst = static_cast<int>(i);
-            }
-        }
+        std::vector<BodyFit> bodies = fitGroups(rig, rules, grouping.group, own.skipped, own.owned, stray);
+        const int worst = smallestBody(bodies, grouping.kept, rules.minVolumeRatio);
         if (worst < 0) return bodies;
         const BodyFit& b = bodies[static_cast<std::size_t>(worst)];
-        mergeInto(b.head, bodies[static_cast<std::size_t>(b.parentBody)].head);
+        grouping.mergeInto(b.head, bodies[static_cast<std::size_t>(b.parentBody)].head);
     }
 }
 

@@ -152,37 +152,45 @@ std::optional<double> metaDouble(const aiScene& scene, const char* key) {
     return std::nullopt;
 }
 
-struct Bind {
-    int node = -1;
-    figure::Transform transform; ///< model units, model axes
+// The scene's nodes flattened, by name, and the node of each mesh.
+struct SceneIndex {
+    std::vector<NodeInfo> nodes;
+    std::map<std::string, int> nodeByName; // first node of a name, as assimp's own lookups
+    std::vector<int> meshNode;             // per mesh, the first node that holds it (−1: none)
+
+    Eigen::Matrix4d meshGlobal(unsigned mesh) const {
+        return meshNode[mesh] >= 0 ? nodes[static_cast<std::size_t>(meshNode[mesh])].global
+                                   : Eigen::Matrix4d::Identity();
+    }
 };
 
-Rig rigFromScene(const aiScene& scene, const std::string& extension, const ImportOptions& options) {
-    validateScene(scene);
-    const std::vector<NodeInfo> nodes = flattenNodes(scene);
-    std::map<std::string, int> nodeByName; // first node of a name, as assimp's own lookups
-    for (std::size_t i = 0; i < nodes.size(); ++i)
-        nodeByName.emplace(nodes[i].node->mName.C_Str(), static_cast<int>(i));
-    std::vector<int> meshNode(scene.mNumMeshes, -1);
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-        const aiNode* n = nodes[i].node;
+SceneIndex indexScene(const aiScene& scene) {
+    SceneIndex index;
+    index.nodes = flattenNodes(scene);
+    for (std::size_t i = 0; i < index.nodes.size(); ++i)
+        index.nodeByName.emplace(index.nodes[i].node->mName.C_Str(), static_cast<int>(i));
+    index.meshNode.assign(scene.mNumMeshes, -1);
+    for (std::size_t i = 0; i < index.nodes.size(); ++i) {
+        const aiNode* n = index.nodes[i].node;
         if (n->mNumMeshes > 0 && !n->mMeshes) throw ImportError{"a node's mesh list is missing"};
         for (unsigned k = 0; k < n->mNumMeshes; ++k) {
             if (n->mMeshes[k] >= scene.mNumMeshes)
                 throw ImportError{"a node names mesh " + std::to_string(n->mMeshes[k])};
-            if (meshNode[n->mMeshes[k]] < 0) meshNode[n->mMeshes[k]] = static_cast<int>(i);
+            if (index.meshNode[n->mMeshes[k]] < 0) index.meshNode[n->mMeshes[k]] = static_cast<int>(i);
         }
     }
+    return index;
+}
 
-    // Bone nodes and their bind transforms: the mesh node's transform after the inverse of the bone's offset.
+// Bone nodes and their bind transforms: the mesh node's transform after the inverse of the bone's offset.
+std::map<int, figure::Transform> boneBinds(const aiScene& scene, const SceneIndex& index) {
     std::map<int, figure::Transform> boneBind;
     for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
         const aiMesh* m = scene.mMeshes[mi];
-        const Eigen::Matrix4d meshGlobal =
-            meshNode[mi] >= 0 ? nodes[static_cast<std::size_t>(meshNode[mi])].global : Eigen::Matrix4d::Identity();
+        const Eigen::Matrix4d meshGlobal = index.meshGlobal(mi);
         for (unsigned b = 0; b < m->mNumBones; ++b) {
-            const auto it = nodeByName.find(m->mBones[b]->mName.C_Str());
-            if (it == nodeByName.end())
+            const auto it = index.nodeByName.find(m->mBones[b]->mName.C_Str());
+            if (it == index.nodeByName.end())
                 throw ImportError{"bone \"" + std::string(m->mBones[b]->mName.C_Str()) + "\" names no node"};
             const Eigen::Matrix4d offset = toEigen(m->mBones[b]->mOffsetMatrix);
             if (std::abs(offset.topLeftCorner<3, 3>().determinant()) < 1e-12)
@@ -191,12 +199,20 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
         }
     }
     if (boneBind.empty()) throw ImportError{"the model has no bones: nothing to build a ragdoll from"};
+    return boneBind;
+}
 
-    // The skeleton: every bone node and its ancestors below the deepest node common to all of them.
+// The skeleton's nodes: every bone node and its ancestors below the deepest node common to all of them (`top`).
+struct SkeletonNodes {
+    int top = -1;
+    std::set<int> nodes;
+};
+
+SkeletonNodes skeletonNodes(const SceneIndex& index, const std::map<int, figure::Transform>& boneBind) {
     std::vector<std::vector<int>> paths;
     for (const auto& [node, bind] : boneBind) {
         std::vector<int> path;
-        for (int n = node; n >= 0; n = nodes[static_cast<std::size_t>(n)].parent) path.push_back(n);
+        for (int n = node; n >= 0; n = index.nodes[static_cast<std::size_t>(n)].parent) path.push_back(n);
         std::reverse(path.begin(), path.end());
         paths.push_back(std::move(path));
     }
@@ -204,91 +220,81 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
     while (std::all_of(paths.begin(), paths.end(),
                        [&](const std::vector<int>& p) { return common < p.size() && p[common] == paths[0][common]; }))
         ++common;
-    const int top = paths[0][common - 1];
-    std::set<int> inSkeleton;
-    for (const auto& p : paths) inSkeleton.insert(p.begin() + static_cast<std::ptrdiff_t>(common - 1), p.end());
+    SkeletonNodes out;
+    out.top = paths[0][common - 1];
+    for (const auto& p : paths) out.nodes.insert(p.begin() + static_cast<std::ptrdiff_t>(common - 1), p.end());
+    return out;
+}
 
-    // Unit and axes: Doom units, Z up, X forward (assimp's Y up, Z forward → Doom's Z up, X forward).
-    const std::string ext = text::lowerAscii(extension);
-    double metres = ext == "gltf" || ext == "glb" ? 1.0
-                    : ext == "fbx"                ? 0.01 * metaDouble(scene, "UnitScaleFactor").value_or(1.0)
-                                                  : kMetresPerDoomUnit;
-    if (options.metresPerUnit) metres = *options.metresPerUnit;
-    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
-    if (options.up.value_or('y') == 'y') axes << 0, 0, 1, 1, 0, 0, 0, 1, 0;
-
-    Rig rig;
+// The rig's joints, parents first: an "origin" root unless the skeleton's top node is one, then every skeleton
+// node at its bind transform (a bone's, else the node's own). `jointOfNode` receives each node's joint.
+void addJoints(Rig& rig, const SceneIndex& index, const std::map<int, figure::Transform>& boneBind,
+               const SkeletonNodes& skeleton, bool topIsOrigin, std::map<int, int>& jointOfNode) {
     std::set<std::string> taken;
-    std::map<int, int> jointOfNode;
-    const bool topIsOrigin = text::lowerAscii(nodes[static_cast<std::size_t>(top)].node->mName.C_Str()) == "origin";
     if (!topIsOrigin) rig.joints.push_back({md5Name("origin", taken), -1, {}});
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
+    for (std::size_t i = 0; i < index.nodes.size(); ++i) {
         const int n = static_cast<int>(i);
-        if (!inSkeleton.count(n)) continue;
-        const int parentNode = nodes[i].parent;
-        const int parent = n == top ? (topIsOrigin ? -1 : 0) : jointOfNode.at(parentNode);
+        if (!skeleton.nodes.count(n)) continue;
+        const int parent = n == skeleton.top ? (topIsOrigin ? -1 : 0) : jointOfNode.at(index.nodes[i].parent);
         figure::Transform bind;
         if (const auto it = boneBind.find(n); it != boneBind.end()) bind = it->second;
-        else bind = rigidPart(nodes[i].global);
+        else bind = rigidPart(index.nodes[i].global);
         jointOfNode[n] = static_cast<int>(rig.joints.size());
-        rig.joints.push_back({md5Name(nodes[i].node->mName.C_Str(), taken), parent, bind});
+        rig.joints.push_back({md5Name(index.nodes[i].node->mName.C_Str(), taken), parent, bind});
     }
+}
 
-    for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
-        const aiMesh* m = scene.mMeshes[mi];
-        const Eigen::Matrix4d meshGlobal =
-            meshNode[mi] >= 0 ? nodes[static_cast<std::size_t>(meshNode[mi])].global : Eigen::Matrix4d::Identity();
-        // Vertices no bone weighs follow the nearest skeleton joint above their mesh node (else the skeleton's top).
-        int rigidJoint = jointOfNode.at(top);
-        for (int n = meshNode[mi]; n >= 0; n = nodes[static_cast<std::size_t>(n)].parent)
-            if (jointOfNode.count(n)) {
-                rigidJoint = jointOfNode.at(n);
-                break;
-            }
-        RigSurface surface;
-        surface.name = m->mName.C_Str();
-        if (scene.mMaterials && m->mMaterialIndex < scene.mNumMaterials && scene.mMaterials[m->mMaterialIndex]) {
-            aiString matName;
-            if (scene.mMaterials[m->mMaterialIndex]->Get(AI_MATKEY_NAME, matName) == AI_SUCCESS)
-                surface.material = matName.C_Str();
-        }
-        for (std::string* s : {&surface.name, &surface.material})
-            for (char& c : *s)
-                if (c == '"' || static_cast<unsigned char>(c) < 0x20) c = '_';
-        surface.vertices.resize(m->mNumVertices);
-        for (unsigned v = 0; v < m->mNumVertices; ++v) {
-            const aiVector3D& p = m->mVertices[v];
-            surface.vertices[v].position = (meshGlobal * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
-            if (m->mTextureCoords[0] && m->mNumUVComponents[0] >= 2) {
-                surface.vertices[v].s = std::isfinite(m->mTextureCoords[0][v].x) ? m->mTextureCoords[0][v].x : 0.0;
-                surface.vertices[v].t =
-                    std::isfinite(m->mTextureCoords[0][v].y) ? 1.0 - m->mTextureCoords[0][v].y : 0.0;
-            }
-        }
-        for (unsigned b = 0; b < m->mNumBones; ++b) {
-            const int joint = jointOfNode.at(nodeByName.at(m->mBones[b]->mName.C_Str()));
-            for (unsigned w = 0; w < m->mBones[b]->mNumWeights; ++w) {
-                const aiVertexWeight& vw = m->mBones[b]->mWeights[w];
-                if (vw.mWeight > 1e-6f) surface.vertices[vw.mVertexId].influences.push_back({joint, vw.mWeight});
-            }
-        }
-        for (RigVertex& v : surface.vertices) {
-            double sum = 0;
-            for (const RigInfluence& in : v.influences) sum += in.weight;
-            if (sum <= 0) v.influences = {{rigidJoint, 1.0}};
-            else
-                for (RigInfluence& in : v.influences) in.weight /= sum;
-        }
-        for (unsigned f = 0; f < m->mNumFaces; ++f) {
-            const aiFace& face = m->mFaces[f];
-            for (unsigned k = 2; k < face.mNumIndices; ++k) // a fan over polygons (triangulated already)
-                surface.triangles.push_back({static_cast<int>(face.mIndices[0]), static_cast<int>(face.mIndices[k - 1]),
-                                             static_cast<int>(face.mIndices[k])});
-        }
-        rig.surfaces.push_back(std::move(surface));
+// Mesh `mi` as a surface: its name and material (quotes and control characters replaced), vertices in model
+// space with their bone weights normalised (a vertex no bone weighs follows `rigidJoint`), triangles as fans.
+RigSurface surfaceOf(const aiScene& scene, unsigned mi, const SceneIndex& index, const std::map<int, int>& jointOfNode,
+                     int rigidJoint) {
+    const aiMesh* m = scene.mMeshes[mi];
+    const Eigen::Matrix4d meshGlobal = index.meshGlobal(mi);
+    RigSurface surface;
+    surface.name = m->mName.C_Str();
+    if (scene.mMaterials && m->mMaterialIndex < scene.mNumMaterials && scene.mMaterials[m->mMaterialIndex]) {
+        aiString matName;
+        if (scene.mMaterials[m->mMaterialIndex]->Get(AI_MATKEY_NAME, matName) == AI_SUCCESS)
+            surface.material = matName.C_Str();
     }
+    for (std::string* s : {&surface.name, &surface.material})
+        for (char& c : *s)
+            if (c == '"' || static_cast<unsigned char>(c) < 0x20) c = '_';
+    surface.vertices.resize(m->mNumVertices);
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        const aiVector3D& p = m->mVertices[v];
+        surface.vertices[v].position = (meshGlobal * Eigen::Vector4d(p.x, p.y, p.z, 1.0)).head<3>();
+        if (m->mTextureCoords[0] && m->mNumUVComponents[0] >= 2) {
+            surface.vertices[v].s = std::isfinite(m->mTextureCoords[0][v].x) ? m->mTextureCoords[0][v].x : 0.0;
+            surface.vertices[v].t = std::isfinite(m->mTextureCoords[0][v].y) ? 1.0 - m->mTextureCoords[0][v].y : 0.0;
+        }
+    }
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+        const int joint = jointOfNode.at(index.nodeByName.at(m->mBones[b]->mName.C_Str()));
+        for (unsigned w = 0; w < m->mBones[b]->mNumWeights; ++w) {
+            const aiVertexWeight& vw = m->mBones[b]->mWeights[w];
+            if (vw.mWeight > 1e-6f) surface.vertices[vw.mVertexId].influences.push_back({joint, vw.mWeight});
+        }
+    }
+    for (RigVertex& v : surface.vertices) {
+        double sum = 0;
+        for (const RigInfluence& in : v.influences) sum += in.weight;
+        if (sum <= 0) v.influences = {{rigidJoint, 1.0}};
+        else
+            for (RigInfluence& in : v.influences) in.weight /= sum;
+    }
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+        const aiFace& face = m->mFaces[f];
+        for (unsigned k = 2; k < face.mNumIndices; ++k) // a fan over polygons (triangulated already)
+            surface.triangles.push_back({static_cast<int>(face.mIndices[0]), static_cast<int>(face.mIndices[k - 1]),
+                                         static_cast<int>(face.mIndices[k])});
+    }
+    return surface;
+}
 
-    // Scale (metres → Doom units, or to the requested height) and axes, applied once to joints and vertices.
+// Scale (metres → Doom units, or to the requested height) and axes, applied once to joints and vertices; the
+// units the rig was read in. `metres` is the format's metres per unit (before the options).
+void scaleRig(Rig& rig, double metres, const Eigen::Matrix3d& axes, bool topIsOrigin, const ImportOptions& options) {
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
     for (const RigJoint& j : rig.joints) {
         lo = lo.cwiseMin(j.bind.position);
@@ -319,6 +325,39 @@ Rig rigFromScene(const aiScene& scene, const std::string& extension, const Impor
                                                : RigUnits::Source::Format;
     rig.units.fileHeight = extent;
     rig.units.up = options.up.value_or('y');
+}
+
+Rig rigFromScene(const aiScene& scene, const std::string& extension, const ImportOptions& options) {
+    validateScene(scene);
+    const SceneIndex index = indexScene(scene);
+    const std::map<int, figure::Transform> boneBind = boneBinds(scene, index);
+    const SkeletonNodes skeleton = skeletonNodes(index, boneBind);
+
+    // Unit and axes: Doom units, Z up, X forward (assimp's Y up, Z forward → Doom's Z up, X forward).
+    const std::string ext = text::lowerAscii(extension);
+    double metres = ext == "gltf" || ext == "glb" ? 1.0
+                    : ext == "fbx"                ? 0.01 * metaDouble(scene, "UnitScaleFactor").value_or(1.0)
+                                                  : kMetresPerDoomUnit;
+    if (options.metresPerUnit) metres = *options.metresPerUnit;
+    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+    if (options.up.value_or('y') == 'y') axes << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+
+    Rig rig;
+    std::map<int, int> jointOfNode;
+    const bool topIsOrigin =
+        text::lowerAscii(index.nodes[static_cast<std::size_t>(skeleton.top)].node->mName.C_Str()) == "origin";
+    addJoints(rig, index, boneBind, skeleton, topIsOrigin, jointOfNode);
+    for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
+        // Vertices no bone weighs follow the nearest skeleton joint above their mesh node (else the skeleton's top).
+        int rigidJoint = jointOfNode.at(skeleton.top);
+        for (int n = index.meshNode[mi]; n >= 0; n = index.nodes[static_cast<std::size_t>(n)].parent)
+            if (jointOfNode.count(n)) {
+                rigidJoint = jointOfNode.at(n);
+                break;
+            }
+        rig.surfaces.push_back(surfaceOf(scene, mi, index, jointOfNode, rigidJoint));
+    }
+    scaleRig(rig, metres, axes, topIsOrigin, options);
     return rig;
 }
 
