@@ -175,6 +175,103 @@ void reportStray(const std::vector<StrayVertices>& stray, const std::string& mod
     }
 }
 
+// The settings block: the engine's friction and contents for a corpse, every body colliding with the others.
+decl::AfSettings settingsFor(const std::string& name, double massKg) {
+    decl::AfSettings settings;
+    settings.model = "model_" + name;
+    settings.skin = "";
+    settings.friction = decl::SettingsFriction{0.01, 0.01, 0.8, std::nullopt};
+    settings.totalMass = massKg;
+    settings.contents = decl::ContentsList{{"corpse"}};
+    settings.clipMask = decl::ContentsList{{"solid", "corpse"}};
+    settings.selfCollision = true;
+    return settings;
+}
+
+// One body per fit, in fit order, all of one density (Doom's: mass per cubic unit, docs/format.md §3.3).
+void addBodies(Generated& out, const Rig& rig, const std::vector<BodyFit>& fits, double massKg, double totalVolume,
+               const text::SourceLocation& written) {
+    decl::AfDecl& af = out.af;
+    const double density = massKg / totalVolume;
+    std::set<std::string> bodyNames;
+    for (const BodyFit& b : fits) {
+        decl::AfBody body;
+        body.location = written;
+        const bool base = b.head == 0;
+        body.name = uniqueName(rig.joints[static_cast<std::size_t>(base ? b.mainJoint : b.head)].name, bodyNames);
+        body.joint = base ? "origin" : rig.joints[static_cast<std::size_t>(b.head)].name;
+        body.mod = "orientation";
+        body.model = shapeOf(b);
+        body.origin = lit(b.centre);
+        if (b.shape != decl::ShapeKind::Bone) {
+            const Eigen::Vector3d angles = figure::rotationToAngles(b.frame);
+            if (angles.norm() > 0) body.angles = decl::AfVector::fromLiteral(vec(angles));
+        }
+        body.density = significant(density, 6); // the same for every body; totalMass sets the sum
+        body.containedJoints = containedJoints(rig, b, fits);
+        af.order.push_back({decl::AfBlockRef::Kind::Body, af.bodies.size()});
+        af.bodies.push_back(std::move(body));
+        out.bodies.push_back({af.bodies.back().name, af.bodies.back().joint, b.shape, b.centre, b.volume,
+                              massKg * b.volume / totalVolume, b.joints, static_cast<int>(b.points.size())});
+    }
+}
+
+// One constraint per body with a parent body, from the rules' template for its head joint.
+void addConstraints(Generated& out, const Rig& rig, const std::vector<BodyFit>& fits, const GenOptions& options,
+                    const Eigen::Vector3d& forward, const text::SourceLocation& written) {
+    decl::AfDecl& af = out.af;
+    std::set<std::string> constraintNames;
+    for (std::size_t i = 0; i < fits.size(); ++i) {
+        const BodyFit& b = fits[i];
+        if (b.parentBody < 0) continue;
+        const std::string& jointName = rig.joints[static_cast<std::size_t>(b.head)].name;
+        const JointTemplate& t = templateFor(jointName, options.rules);
+        decl::AfConstraint c = constraintFor(rig, b, uniqueName(af.bodies[i].name, constraintNames), af.bodies[i].name,
+                                             af.bodies[static_cast<std::size_t>(b.parentBody)].name, t, forward);
+        c.location = written;
+        af.order.push_back({decl::AfBlockRef::Kind::Constraint, af.constraints.size()});
+        af.constraints.push_back(std::move(c));
+        out.joints.push_back({af.constraints.back().name, t.role, static_cast<int>(i), b.parentBody});
+    }
+}
+
+// Builds the figure once, as the runtime will, and turns self-collision off for the smaller of every pair of bodies
+// that touch at the bind pose (as the hand-made figures do for the upper arms against the chest); the flags change
+// nothing else in the figure. False when the figure does not build (the reasons are in `diagnostics`).
+bool buildAndExemptTouching(Generated& out, const std::vector<BodyFit>& fits, const GenOptions& options,
+                            text::Diagnostics& diagnostics) {
+    decl::AfDecl& af = out.af;
+    text::Diagnostics skeletonDiags;
+    const auto skeleton = figure::Skeleton::build(out.mesh, out.afPose, out.modelOffset, skeletonDiags, options.name);
+    if (!skeleton) {
+        diagnostics.append(skeletonDiags);
+        return false;
+    }
+    text::Diagnostics findings;
+    figure::FigureInput input;
+    input.decl = &af;
+    input.skeleton = &*skeleton;
+    auto fig = figure::buildFigure(input, findings);
+    if (!fig) {
+        diagnostics.append(findings);
+        diagnostics.error({options.name, 0, 0}, "the generated figure does not build (see above)");
+        return false;
+    }
+    // The figure's other findings (mass ratios, thin bodies) are the user's to see; touching pairs are fixed below.
+    for (const text::Diagnostic& d : findings.items())
+        if (d.message.find("self-colliding bodies") == std::string::npos) diagnostics.add(d);
+    for (const auto& [a, b] : figure::selfCollisionPairs(*fig)) {
+        const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
+        if (!af.bodies[ia].selfCollision.value_or(true) || !af.bodies[ib].selfCollision.value_or(true)) continue;
+        if (figure::separation(fig->bodies[ia], fig->bodies[ib]) >= figure::kTouchToleranceM) continue;
+        const std::size_t smaller = fits[ia].volume <= fits[ib].volume ? ia : ib;
+        af.bodies[smaller].selfCollision = false;
+        fig->bodies[smaller].selfCollision = false;
+    }
+    out.figure = std::move(fig);
+    return true;
+}
+
 } // namespace
 
 std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& options, text::Diagnostics& diagnostics) {
@@ -202,7 +299,6 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
         diagnostics.error(where, "the bodies have no volume or the mass is not positive");
         return std::nullopt;
     }
-    const double density = mass / totalVolume; // Doom's density: mass per cubic unit (docs/format.md §3.3)
 
     decl::AfDecl& af = out.af;
     af.name = options.name;
@@ -211,84 +307,12 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     const text::SourceLocation written{
         options.outDir.empty() ? afPath : (std::filesystem::path(options.outDir) / afPath).string(), 0, 0};
     af.location = written;
-    decl::AfSettings settings;
-    settings.model = "model_" + options.name;
-    settings.skin = "";
-    settings.friction = decl::SettingsFriction{0.01, 0.01, 0.8, std::nullopt};
-    settings.totalMass = mass;
-    settings.contents = decl::ContentsList{{"corpse"}};
-    settings.clipMask = decl::ContentsList{{"solid", "corpse"}};
-    settings.selfCollision = true;
-    af.settings.push_back(settings);
+    af.settings.push_back(settingsFor(options.name, mass));
     af.order.push_back({decl::AfBlockRef::Kind::Settings, 0});
-
-    std::set<std::string> bodyNames;
-    for (const BodyFit& b : fits) {
-        decl::AfBody body;
-        body.location = written;
-        const bool base = b.head == 0;
-        body.name = uniqueName(rig.joints[static_cast<std::size_t>(base ? b.mainJoint : b.head)].name, bodyNames);
-        body.joint = base ? "origin" : rig.joints[static_cast<std::size_t>(b.head)].name;
-        body.mod = "orientation";
-        body.model = shapeOf(b);
-        body.origin = lit(b.centre);
-        if (b.shape != decl::ShapeKind::Bone) {
-            const Eigen::Vector3d angles = figure::rotationToAngles(b.frame);
-            if (angles.norm() > 0) body.angles = decl::AfVector::fromLiteral(vec(angles));
-        }
-        body.density = significant(density, 6); // the same for every body; totalMass sets the sum
-        body.containedJoints = containedJoints(rig, b, fits);
-        af.order.push_back({decl::AfBlockRef::Kind::Body, af.bodies.size()});
-        af.bodies.push_back(std::move(body));
-        out.bodies.push_back({af.bodies.back().name, af.bodies.back().joint, b.shape, b.centre, b.volume,
-                              mass * b.volume / totalVolume, b.joints, static_cast<int>(b.points.size())});
-    }
-    std::set<std::string> constraintNames;
-    for (std::size_t i = 0; i < fits.size(); ++i) {
-        const BodyFit& b = fits[i];
-        if (b.parentBody < 0) continue;
-        const std::string& jointName = rig.joints[static_cast<std::size_t>(b.head)].name;
-        const JointTemplate& t = templateFor(jointName, options.rules);
-        decl::AfConstraint c = constraintFor(rig, b, uniqueName(af.bodies[i].name, constraintNames), af.bodies[i].name,
-                                             af.bodies[static_cast<std::size_t>(b.parentBody)].name, t, forward);
-        c.location = written;
-        af.order.push_back({decl::AfBlockRef::Kind::Constraint, af.constraints.size()});
-        af.constraints.push_back(std::move(c));
-        out.joints.push_back({af.constraints.back().name, t.role, static_cast<int>(i), b.parentBody});
-    }
+    addBodies(out, rig, fits, mass, totalVolume, written);
+    addConstraints(out, rig, fits, options, forward, written);
     out.totalMassKg = mass;
-
-    // Self-collision off for the smaller of every pair of bodies that touch at the bind pose (as the hand-made
-    // figures do for the upper arms against the chest).
-    text::Diagnostics skeletonDiags;
-    const auto skeleton = figure::Skeleton::build(out.mesh, out.afPose, out.modelOffset, skeletonDiags, options.name);
-    if (!skeleton) {
-        diagnostics.append(skeletonDiags);
-        return std::nullopt;
-    }
-    // Build the figure once, as the runtime will; the flags changed below change nothing else in it.
-    text::Diagnostics findings;
-    figure::FigureInput input;
-    input.decl = &af;
-    input.skeleton = &*skeleton;
-    auto fig = figure::buildFigure(input, findings);
-    if (!fig) {
-        diagnostics.append(findings);
-        diagnostics.error(where, "the generated figure does not build (see above)");
-        return std::nullopt;
-    }
-    // The figure's other findings (mass ratios, thin bodies) are the user's to see; touching pairs are fixed below.
-    for (const text::Diagnostic& d : findings.items())
-        if (d.message.find("self-colliding bodies") == std::string::npos) diagnostics.add(d);
-    for (const auto& [a, b] : figure::selfCollisionPairs(*fig)) {
-        const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
-        if (!af.bodies[ia].selfCollision.value_or(true) || !af.bodies[ib].selfCollision.value_or(true)) continue;
-        if (figure::separation(fig->bodies[ia], fig->bodies[ib]) >= figure::kTouchToleranceM) continue;
-        const std::size_t smaller = fits[ia].volume <= fits[ib].volume ? ia : ib;
-        af.bodies[smaller].selfCollision = false;
-        fig->bodies[smaller].selfCollision = false;
-    }
-    out.figure = std::move(fig);
+    if (!buildAndExemptTouching(out, fits, options, diagnostics)) return std::nullopt;
     return out;
 }
 
