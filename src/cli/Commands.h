@@ -16,6 +16,8 @@ void addFmtCommand(CLI::App& app, int& exitCode);
 void addResolveCommand(CLI::App& app, int& exitCode);
 /// Registers `afb drop`; `argv` is kept to re-run the sibling binary of the other Bullet precision.
 void addDropCommand(CLI::App& app, int& exitCode, int argc, char** argv);
+/// Registers `afb track`.
+void addTrackCommand(CLI::App& app, int& exitCode);
 /// Registers `afb golden record|compare`.
 void addGoldenCommand(CLI::App& app, int& exitCode);
 /// Registers `afb inspect`.

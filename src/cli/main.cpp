@@ -31,7 +31,7 @@ std::string versionLine() {
 
 int main(int argc, char** argv) {
     CLI::App app{"afb — Doom 3 articulated figures (.af) on Bullet: parse, format, resolve, inspect, drop, "
-                 "golden, draw, chart, stress, gen, methods; plan, run, merge.\n"
+                 "track, golden, draw, chart, stress, gen, methods; plan, run, merge.\n"
                  "Diagnostics go to stderr as file:line:col: error: message. Exit code 0 on success, 1 on a failed "
                  "check or bad input, 2 on a command line that makes no sense. A report written to '-' goes to "
                  "stdout alone; the human text goes to stderr then."};
@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
     afb::cli::addResolveCommand(app, exitCode);
     afb::cli::addInspectCommand(app, exitCode);
     afb::cli::addDropCommand(app, exitCode, argc, argv);
+    afb::cli::addTrackCommand(app, exitCode);
     afb::cli::addGoldenCommand(app, exitCode);
     afb::cli::addDrawCommand(app, exitCode);
     afb::cli::addChartCommand(app, exitCode, argv);

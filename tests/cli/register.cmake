@@ -75,6 +75,10 @@ afb_cli_test(drop_hung_not_frozen 0 ARGS drop --base . chain --height 1000 --sec
 # Entities that share a figure are told apart in the table: each row names its entity, then the figure.
 afb_cli_test(drop_entity_rows 0 ARGS drop --base . humanoid humanoid_sleeping --steps 1
              MATCH "humanoid +15 +1 " "humanoid_sleeping \\(humanoid\\) +15 +1 ")
+# afb track: its JSON and CSV reports, a hit, and bad input refused.
+add_test(NAME cli.track
+  COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" "-DSRC=${PROJECT_SOURCE_DIR}"
+          "-DTMP=${CMAKE_CURRENT_BINARY_DIR}/track" -P ${CMAKE_CURRENT_LIST_DIR}/track.cmake)
 # afb drop --lod: the humanoid at six rigid bodies, recorded in the report; refused where it cannot apply.
 afb_cli_test(drop_lod 0 ARGS drop --base . humanoid --steps 30 --lod 6 --json -
              MATCH "6 rigid bodies for 15 bodies" "\"lod_bodies\": 6" "\"lod\": 6")
