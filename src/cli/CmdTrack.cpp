@@ -179,7 +179,8 @@ void printTrackTable(const TrackCli& opt, const sim::TrackResult& r) {
 }
 
 void writeTrackReports(const TrackCli& opt, const sim::TrackResult& r, const figure::Figure& figure) {
-    const nlohmann::json all = {{"bullet", sim::bulletVersion()},
+    const nlohmann::json all = {{"schema", sim::schemaJson(sim::kTrackSchema)},
+                                {"bullet", sim::bulletVersion()},
                                 {"precision", sim::bulletPrecision()},
                                 {"gravity_mps2", figure.units.gravityMps2},
                                 {"entity", opt.entity},

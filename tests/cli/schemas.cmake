@@ -26,6 +26,8 @@ endfunction()
 
 run(0 drop --base "${SRC}" chain --steps 3 --json -)
 expect_schema("afb drop --json -" "${out}" afbullet-drop)
+run(0 track --base "${SRC}" humanoid --anim "${SRC}/models/md5/humanoid/walk.md5anim" --seconds 1 --json -)
+expect_schema("afb track --json -" "${out}" afbullet-track)
 run(0 methods --json)
 expect_schema("afb methods --json" "${out}" afbullet-methods)
 run(0 methods fast --json)

@@ -20,6 +20,7 @@ struct ReportSchema {
     int version;
 };
 inline constexpr ReportSchema kDropSchema{"afbullet-drop", 1};       ///< afb drop --json
+inline constexpr ReportSchema kTrackSchema{"afbullet-track", 1};     ///< afb track --json
 inline constexpr ReportSchema kStressSchema{"afbullet-stress", 1};   ///< afb stress's stress.json
 inline constexpr ReportSchema kGoldenSchema{"afbullet-golden", 1};   ///< afb golden record's files
 inline constexpr ReportSchema kInspectSchema{"afbullet-inspect", 1}; ///< afb inspect --json
