@@ -11,8 +11,6 @@ namespace {
 
 using nlohmann::json;
 
-json optional(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
-
 struct Field {
     std::string_view name;
     std::string_view help;
@@ -63,17 +61,21 @@ const std::vector<Field>& fields() {
         {"max_speed_mps", "fastest body", [](const DropResult& r) { return json(r.maxSpeedMps); }},
         {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
          [](const DropResult& r) { return json(r.exploded); }},
-        {"exploded_at_s", "when it first exploded", [](const DropResult& r) { return optional(r.explodedAtS); }},
+        {"exploded_at_s", "when it first exploded", [](const DropResult& r) { return jsonOrNull(r.explodedAtS); }},
         {"non_finite", "a body's pose or velocity became NaN or infinite (a runtime failure, never expected)",
          [](const DropResult& r) { return json(r.nonFinite); }},
         {"settle_time_s", "every instance at rest by its figure's rules, else null",
-         [](const DropResult& r) { return optional(r.settleTimeS); }},
+         [](const DropResult& r) { return jsonOrNull(r.settleTimeS); }},
         {"frozen_before_contact",
          "instances put to rest by their rules (maxMoveTime) before they touched anything: frozen in the air",
          [](const DropResult& r) { return json(r.frozenBeforeContact); }},
     };
     return table;
 }
+
+} // namespace
+
+json jsonOrNull(const std::optional<double>& value) { return value ? json(*value) : json(nullptr); }
 
 std::string csvCell(const json& v) {
     if (v.is_null()) return "";
@@ -87,8 +89,6 @@ std::string csvCell(const json& v) {
     }
     return v.dump();
 }
-
-} // namespace
 
 nlohmann::json schemaJson(const ReportSchema& schema) { return {{"name", schema.name}, {"version", schema.version}}; }
 

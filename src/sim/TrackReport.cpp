@@ -10,8 +10,6 @@ namespace {
 
 using nlohmann::json;
 
-json trackOrNull(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
-
 struct TrackField {
     std::string_view name;
     std::string_view help;
@@ -55,7 +53,7 @@ const std::vector<TrackField>& trackFields() {
          [](const R& r) { return json(r.animLimitExcessDeg); }},
         {"anim_limit_joint", "the constraint where it happened", [](const R& r) { return json(r.animLimitJoint); }},
         {"hit_body", "the body --hit struck (empty without one)", [](const R& r) { return json(r.hitBody); }},
-        {"hit_at_s", "when it struck", [](const R& r) { return trackOrNull(r.hitAtS); }},
+        {"hit_at_s", "when it struck", [](const R& r) { return jsonOrNull(r.hitAtS); }},
         {"pre_hit_max_m", "largest joint distance between the warm-up and the hit (0 without a hit)",
          [](const R& r) { return json(r.preHitMaxM); }},
         {"pre_hit_max_deg", "largest joint angle between the warm-up and the hit",
@@ -63,13 +61,13 @@ const std::vector<TrackField>& trackFields() {
         {"recovery_s",
          "from the hit until the largest joint errors stay within 1.1 x the pre-hit ones + 1 mm / 0.5 deg; null "
          "without a hit or when they never did",
-         [](const R& r) { return trackOrNull(r.recoveryS); }},
+         [](const R& r) { return jsonOrNull(r.recoveryS); }},
         {"max_speed_mps", "fastest body", [](const R& r) { return json(r.maxSpeedMps); }},
         {"max_anchor_error_m", "largest separation of a constraint's two anchor copies",
          [](const R& r) { return json(r.maxAnchorErrorM); }},
         {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
          [](const R& r) { return json(r.exploded); }},
-        {"exploded_at_s", "when it first exploded", [](const R& r) { return trackOrNull(r.explodedAtS); }},
+        {"exploded_at_s", "when it first exploded", [](const R& r) { return jsonOrNull(r.explodedAtS); }},
         {"wall_ms", "wall time of the whole run", [](const R& r) { return json(r.wallMs); }},
         {"us_per_step", "wall time of stepping per step", [](const R& r) { return json(r.usPerStep); }},
         {"awake_body_steps", "body-steps not asleep (keyframed bodies included)",
@@ -81,19 +79,6 @@ const std::vector<TrackField>& trackFields() {
          [](const R& r) { return json(r.cpuUsPerAwakeBodyStep); }},
     };
     return table;
-}
-
-std::string trackCsvCell(const json& v) {
-    if (v.is_null()) return "";
-    if (v.is_boolean()) return v.get<bool>() ? "1" : "0";
-    if (v.is_string()) {
-        const std::string s = v.get<std::string>();
-        if (s.find_first_of(",\"\n") == std::string::npos) return s;
-        std::string q = "\"";
-        for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-        return q + "\"";
-    }
-    return v.dump();
 }
 
 } // namespace
@@ -130,7 +115,7 @@ std::string trackCsvRow(const TrackResult& r) {
     std::string out;
     bool first = true;
     for (const TrackField& f : trackFields()) {
-        out += (first ? "" : ",") + trackCsvCell(f.value(r));
+        out += (first ? "" : ",") + csvCell(f.value(r));
         first = false;
     }
     for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += "," + bullet::knobValue(r.method, k);

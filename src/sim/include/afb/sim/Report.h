@@ -1,6 +1,7 @@
 #pragma once
 // The one place drop results, drop scenarios and methods are serialised (JSON and CSV), for `afb drop`,
 // `afb golden` and anything else that records a run.
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +36,11 @@ nlohmann::json schemaJson(const ReportSchema& schema);
 /// Whether a document read back (a golden file) can be read as `schema`: its "schema" names it at this version or
 /// an older one, or it has no "schema" (written before reports carried one: version 1). Else an error message.
 std::string checkSchema(const nlohmann::json& document, const ReportSchema& schema);
+
+/// A value that may be absent, as JSON: the number, or null.
+nlohmann::json jsonOrNull(const std::optional<double>& value);
+/// A report field as a CSV cell: null empty, booleans 1 / 0, text quoted where it holds a comma, quote or newline.
+std::string csvCell(const nlohmann::json& value);
 
 /// The method as JSON: {"name": …, "<knob>": value, …} (numbers as numbers, flags as booleans, enums as text).
 nlohmann::json methodJson(const bullet::Method& method);
