@@ -261,8 +261,8 @@ struct TrackLoop {
     bool run(text::Diagnostics& diags) {
         const double dt = 1.0 / o.hz;
         const int steps = static_cast<int>(std::lround(o.seconds * o.hz));
-        const std::optional<int> hitStep =
-            o.hit ? std::optional(static_cast<int>(std::lround(o.hit->atSeconds * o.hz))) : std::nullopt;
+        // The step the hit lands on, −1 for none (a plain int: GCC at -O1 takes an optional's value for unset).
+        const int hitStep = o.hit ? static_cast<int>(std::lround(o.hit->atSeconds * o.hz)) : -1;
         std::vector<StepErrors> perStep;
         double sumM2 = 0, sumDeg2 = 0, cpu = 0, awakeCpu = 0, wall = 0;
         long long samples = 0;
@@ -273,7 +273,7 @@ struct TrackLoop {
             auto joints = anim.joints(t1, diags);
             if (!target || !joints) return false;
             animationLimitExcess(doll.figure(), *target, r);
-            if (hitStep && k == *hitStep) applyHit(doll, *o.hit, k * dt, r);
+            if (k == hitStep) applyHit(doll, *o.hit, k * dt, r);
             (void)doll.setKeyframeTargets(*target); // one finite state per body
             (void)doll.driveToPose(*target);
             const auto wall0 = std::chrono::steady_clock::now();
