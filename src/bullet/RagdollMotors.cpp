@@ -37,7 +37,7 @@ bool finite(const figure::BodyState& s) {
 } // namespace
 
 MotorGains scaledGains(const MotorGains& gains, double strength) {
-    if (strength >= 1) return gains;
+    if (strength == 1) return gains;
     MotorGains out = gains;
     if (!(strength > 0)) {
         out.frequencyHz = 0;

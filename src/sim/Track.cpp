@@ -203,17 +203,6 @@ const char* toString(TrackRoot root) { return root == TrackRoot::Free ? "free" :
 
 bullet::MotorGains defaultTrackGains() { return bullet::MotorGains{15.0, 4.0}; }
 
-bullet::MotorGains trackGains(const bullet::MotorGains& gains, double strength) {
-    if (strength <= 1) return bullet::scaledGains(gains, strength);
-    bullet::MotorGains out = gains;
-    const double root = std::sqrt(strength);
-    out.frequencyHz *= root;
-    out.dampingRatio *= root;
-    out.maxTorqueNm *= strength;
-    out.maxForceN *= strength;
-    return out;
-}
-
 std::vector<int> trackLegBodies(const figure::Figure& f) {
     const auto n = f.bodies.size();
     std::vector<std::vector<int>> next(n);
@@ -335,7 +324,7 @@ std::optional<TrackResult> runTrack(const figure::Figure& figure, const decl::Md
     r.method = o.method;
     r.root = o.root;
     r.strength = o.strength;
-    r.gains = trackGains(defaultTrackGains(), o.strength);
+    r.gains = bullet::scaledGains(defaultTrackGains(), o.strength);
     r.loopSeconds = looped.loopSeconds();
     r.bodies = static_cast<int>(figure.bodies.size());
     r.constraints = static_cast<int>(figure.constraints.size());

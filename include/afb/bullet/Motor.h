@@ -29,8 +29,9 @@ struct MotorProfile {
     std::vector<std::pair<std::string, MotorGains>> joints; ///< then these, by constraint name
 };
 
-/// The gains at a strength (Ragdoll::setMotorStrength): stiffness, damping and the bounds times `strength`, i.e.
-/// the frequency and the damping ratio times its square root. 0 gives a motor that is off.
+/// The gains at a strength ≥ 0 (Ragdoll::setMotorStrength takes [0, 1]; afb track --strength any): stiffness, damping
+/// and the bounds times `strength`, i.e. the frequency and the damping ratio times its square root. 0 gives a motor
+/// that is off.
 MotorGains scaledGains(const MotorGains& gains, double strength);
 
 /// How a powered ragdoll takes a hit (Ragdoll::hit): its motors drop to `strength` at once and regain the gains as

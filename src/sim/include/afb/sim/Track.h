@@ -31,10 +31,6 @@ const char* toString(TrackRoot root);
 /// swing about a walk instead of following it.
 bullet::MotorGains defaultTrackGains();
 
-/// `gains` at `strength` ≥ 0: stiffness, damping and bounds times `strength` (frequency and damping ratio times its
-/// square root), as Ragdoll::setMotorStrength scales them, above 1 as well. 0 is off (limp).
-bullet::MotorGains trackGains(const bullet::MotorGains& gains, double strength);
-
 /// The legs of a figure, keyframed under TrackRoot::Free: the bodies of every subtree that hangs from body 0 in the
 /// figure's constraint tree (body 0 at its root, one edge per jointed pair) whose top body's centre of mass lies
 /// below body 0's at the load pose (model Z). A humanoid's thighs, shins and feet; its spine, with the arms and the
@@ -56,7 +52,7 @@ struct TrackOptions {
     double hz = 60.0;           ///< fixed frame rate (each frame is the method's substeps)
     bullet::Method method = {}; ///< rigid backend, not the raw method (motors and keyframes need both)
     TrackRoot root = TrackRoot::Keyframed;
-    double strength = 1.0;       ///< the gains are trackGains(defaultTrackGains(), strength)
+    double strength = 1.0;       ///< the gains are bullet::scaledGains(defaultTrackGains(), strength)
     std::optional<TrackHit> hit; ///< one hit, or none
     double warmupSeconds = 0.5;  ///< the tracking errors are taken from this time on
 };
