@@ -153,14 +153,11 @@ void writeReports(const DropCli& opt, const std::vector<sim::DropResult>& result
                           {"scenario", sim::dropOptionsJson(opt.drop)},
                           {"runs", nlohmann::json::array()}};
     for (const sim::DropResult& r : results) all["runs"].push_back(sim::dropResultJson(r));
-    if (opt.json == "-") std::cout << all.dump(2) << "\n";
-    else if (!opt.json.empty()) std::ofstream(opt.json) << all.dump(2) << "\n";
+    if (!opt.json.empty()) writeReport(opt.json, all.dump(2) + "\n");
     if (opt.csv.empty()) return;
-    std::ofstream file;
-    if (opt.csv != "-") file.open(opt.csv);
-    std::ostream& csv = opt.csv == "-" ? std::cout : file;
-    csv << sim::dropCsvHeader() << "\n";
-    for (const sim::DropResult& r : results) csv << sim::dropCsvRow(r) << "\n";
+    std::string csv = sim::dropCsvHeader() + "\n";
+    for (const sim::DropResult& r : results) csv += sim::dropCsvRow(r) + "\n";
+    writeReport(opt.csv, csv);
 }
 
 // Writes --gltf's replay of one drop; returns the lines to print after the table, or nullopt when it failed.

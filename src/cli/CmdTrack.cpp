@@ -187,13 +187,8 @@ void writeTrackReports(const TrackCli& opt, const sim::TrackResult& r, const fig
                                 {"anim", opt.anim.string()},
                                 {"scenario", sim::trackOptionsJson(opt.track, figure)},
                                 {"runs", nlohmann::json::array({sim::trackResultJson(r)})}};
-    if (opt.json == "-") std::cout << all.dump(2) << "\n";
-    else if (!opt.json.empty()) std::ofstream(opt.json) << all.dump(2) << "\n";
-    if (opt.csv.empty()) return;
-    std::ofstream file;
-    if (opt.csv != "-") file.open(opt.csv);
-    std::ostream& csv = opt.csv == "-" ? std::cout : file;
-    csv << sim::trackCsvHeader() << "\n" << sim::trackCsvRow(r) << "\n";
+    if (!opt.json.empty()) writeReport(opt.json, all.dump(2) + "\n");
+    if (!opt.csv.empty()) writeReport(opt.csv, sim::trackCsvHeader() + "\n" + sim::trackCsvRow(r) + "\n");
 }
 
 bool writeTrackReplay(const TrackCli& opt, const figure::LoadedFigure& loaded, const sim::DropRecording& recording) {

@@ -52,6 +52,9 @@ void execOtherPrecision(const std::string& precision, char** argv, const char* c
 bool findEntities(const decl::Library& library, const std::vector<std::string>& entities,
                   text::Diagnostics& diagnostics);
 
+/// Writes a report (a JSON or CSV document) to the file `path`, or to stdout for "-" (docs/cli.md: reports on
+/// stdout).
+void writeReport(const std::string& path, const std::string& text);
 /// Prints every diagnostic to stderr as `file:line:col: error: message`.
 void printDiagnostics(const text::Diagnostics& diagnostics);
 /// Diagnostics as JSON: {"errors": [...], "warnings": [...]} of formatted messages.

@@ -4,6 +4,7 @@
 #include <functional>
 #include <sstream>
 
+#include "ReportFields.h"
 #include "afb/sim/RawRagdoll.h"
 
 namespace afb::sim {
@@ -11,11 +12,7 @@ namespace {
 
 using nlohmann::json;
 
-struct Field {
-    std::string_view name;
-    std::string_view help;
-    std::function<json(const DropResult&)> value;
-};
+using Field = detail::ReportField<DropResult>;
 
 const std::vector<Field>& fields() {
     static const std::vector<Field> table = {
@@ -195,8 +192,7 @@ json poseJson(const std::vector<JointPose>& pose) {
 }
 
 json dropResultJson(const DropResult& r) {
-    json j = json::object();
-    for (const Field& f : fields()) j[std::string(f.name)] = f.value(r);
+    json j = detail::fieldsJson(fields(), r);
     j["method"] = methodJson(r.method);
     j["final_pose"] = {{"entity",
                         {{"position", {r.entity[0], r.entity[1], r.entity[2]}},
@@ -205,24 +201,13 @@ json dropResultJson(const DropResult& r) {
     return j;
 }
 
-std::string dropCsvHeader() {
-    std::string out;
-    for (const Field& f : fields()) out += (out.empty() ? "" : ",") + std::string(f.name);
-    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += ",method." + std::string(k.name);
-    return out;
-}
+std::string dropCsvHeader() { return detail::fieldsCsvHeader(fields()); }
 
-std::string dropCsvRow(const DropResult& r) {
-    std::string out;
-    for (const Field& f : fields()) out += (out.empty() ? "" : ",") + csvCell(f.value(r));
-    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += "," + bullet::knobValue(r.method, k);
-    return out;
-}
+std::string dropCsvRow(const DropResult& r) { return detail::fieldsCsvRow(fields(), r, r.method); }
 
 std::string dropFieldsHelp() {
     std::ostringstream out;
-    out << "Fields (JSON and CSV):";
-    for (const Field& f : fields()) out << "\n  " << f.name << ": " << f.help;
+    out << detail::fieldsHelp(fields());
     out << "\n  final_pose (JSON only): first instance's entity transform and every md5 joint's model-space position "
            "and w,x,y,z quaternion, metres.";
     return out.str();

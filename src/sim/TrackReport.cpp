@@ -1,7 +1,6 @@
 // Tracking results as JSON and CSV: one table of fields feeds both and the help text, as the drop reports do.
-#include <functional>
-#include <sstream>
 
+#include "ReportFields.h"
 #include "afb/sim/Report.h"
 #include "afb/sim/Track.h"
 
@@ -10,11 +9,7 @@ namespace {
 
 using nlohmann::json;
 
-struct TrackField {
-    std::string_view name;
-    std::string_view help;
-    std::function<json(const TrackResult&)> value;
-};
+using TrackField = detail::ReportField<TrackResult>;
 
 const std::vector<TrackField>& trackFields() {
     using R = TrackResult;
@@ -98,35 +93,15 @@ json trackOptionsJson(const TrackOptions& o, const figure::Figure& figure) {
 }
 
 json trackResultJson(const TrackResult& r) {
-    json j = json::object();
-    for (const TrackField& f : trackFields()) j[std::string(f.name)] = f.value(r);
+    json j = detail::fieldsJson(trackFields(), r);
     j["method"] = methodJson(r.method);
     return j;
 }
 
-std::string trackCsvHeader() {
-    std::string out;
-    for (const TrackField& f : trackFields()) out += (out.empty() ? "" : ",") + std::string(f.name);
-    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += ",method." + std::string(k.name);
-    return out;
-}
+std::string trackCsvHeader() { return detail::fieldsCsvHeader(trackFields()); }
 
-std::string trackCsvRow(const TrackResult& r) {
-    std::string out;
-    bool first = true;
-    for (const TrackField& f : trackFields()) {
-        out += (first ? "" : ",") + csvCell(f.value(r));
-        first = false;
-    }
-    for (const bullet::MethodKnob& k : bullet::methodKnobs()) out += "," + bullet::knobValue(r.method, k);
-    return out;
-}
+std::string trackCsvRow(const TrackResult& r) { return detail::fieldsCsvRow(trackFields(), r, r.method); }
 
-std::string trackFieldsHelp() {
-    std::ostringstream out;
-    out << "Fields (JSON and CSV):";
-    for (const TrackField& f : trackFields()) out << "\n  " << f.name << ": " << f.help;
-    return out.str();
-}
+std::string trackFieldsHelp() { return detail::fieldsHelp(trackFields()); }
 
 } // namespace afb::sim
