@@ -85,12 +85,13 @@ constexpr auto kBackward = backwardTable(std::make_integer_sequence<int, kUnroll
 
 } // namespace
 
-bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
+bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent, bool zeroBlocks) {
     const std::size_t n = dims.size();
     // The same layout as last time (a figure's joints from step to step): only the blocks need zeroing.
     if (n == m_dim.size() && parent.size() == n && m_order.size() == n && std::ranges::equal(dims, m_dim) &&
         std::ranges::equal(parent, m_parent)) {
-        std::fill(m_blocks.begin(), m_blocks.end(), 0.0);
+        if (zeroBlocks) std::fill(m_blocks.begin(), m_blocks.end(), 0.0);
+        std::fill(m_inverted.begin(), m_inverted.end(), 0);
         return true;
     }
     m_dim.assign(dims.begin(), dims.end());
@@ -99,6 +100,8 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
     m_diagAt.assign(n, 0);
     m_edgeAt.assign(n, 0);
     m_gainAt.assign(n, 0);
+    m_leaf.assign(n, 1);
+    m_inverted.assign(n, 0);
     m_order.clear();
     m_steps.clear();
     m_size = 0;
@@ -119,14 +122,18 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
             gains += static_cast<std::size_t>(m_dim[i] * m_dim[static_cast<std::size_t>(p)]);
         }
     }
-    m_blocks.assign(blocks, 0.0);
-    m_gain.assign(gains, 0.0);
+    if (zeroBlocks) m_blocks.assign(blocks, 0.0);
+    else m_blocks.resize(blocks);
+    m_gain.resize(gains); // written whole by factor()
     // Post-order from every root: children before their parent. A node on a cycle is never reached.
     std::vector<std::vector<int>>& children = m_children;
     if (children.size() < n) children.resize(n);
     for (std::size_t i = 0; i < n; ++i) children[i].clear();
     for (std::size_t i = 0; i < n; ++i)
-        if (m_parent[i] >= 0) children[static_cast<std::size_t>(m_parent[i])].push_back(static_cast<int>(i));
+        if (m_parent[i] >= 0) {
+            children[static_cast<std::size_t>(m_parent[i])].push_back(static_cast<int>(i));
+            m_leaf[static_cast<std::size_t>(m_parent[i])] = 0;
+        }
     std::vector<std::pair<int, std::size_t>>& stack = m_stack;
     stack.clear();
     for (std::size_t r = 0; r < n; ++r) {
@@ -158,9 +165,9 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent) {
 namespace {
 
 // The inverse of a symmetric definite (positive or negative) d × d matrix `a`, row-major, by LDLᵀ without
-// pivoting (a definite matrix needs none), written transposed (solve()'s layout; the rounding need not leave it
-// symmetric). False when a pivot is zero or not finite. `a` is read only until the inverse is written, so the
-// two may be the same block. D > 0: a fixed size (unrolled), D = 0: `n`.
+// pivoting (a definite matrix needs none), written transposed (solve()'s layout; the inverse is symmetric, so
+// the two layouts hold the same numbers). False when a pivot is zero or not finite. `a` is read only until the inverse
+// is written, so the two may be the same block. D > 0: a fixed size (unrolled), D = 0: `n`.
 template <int D>
 bool invertDefinite(const double* a, int n, double* inverse) {
     const int d = D > 0 ? D : n;
@@ -177,20 +184,23 @@ bool invertDefinite(const double* a, int n, double* inverse) {
             l[i * d + j] = v / dj;
         }
     }
-    // Column c of the inverse: L y = e_c, y /= D, Lᵀ x = y.
+    // Column c of the inverse from row c down: L y = e_c (y is zero above row c), y /= D, Lᵀ x = y (row i needs
+    // only the rows below it). The inverse is symmetric: the entries above the diagonal are mirrored, a third of
+    // the work of solving every column whole.
     for (int c = 0; c < d; ++c) {
         double y[D > 0 ? D : kMaxDim];
-        for (int i = 0; i < d; ++i) {
+        for (int i = c; i < d; ++i) {
             double v = i == c ? 1.0 : 0.0;
-            for (int k = 0; k < i; ++k) v -= l[i * d + k] * y[k];
+            for (int k = c; k < i; ++k) v -= l[i * d + k] * y[k];
             y[i] = v;
         }
-        for (int i = 0; i < d; ++i) y[i] /= diag[i];
-        for (int i = d - 1; i >= 0; --i) {
+        for (int i = c; i < d; ++i) y[i] /= diag[i];
+        for (int i = d - 1; i >= c; --i) {
             double v = y[i];
             for (int k = i + 1; k < d; ++k) v -= l[k * d + i] * inverse[c * d + k];
             inverse[c * d + i] = v; // transposed: column c of the inverse is row c here
         }
+        for (int i = 0; i < c; ++i) inverse[c * d + i] = inverse[i * d + c];
     }
     for (int k = 0; k < d * d; ++k)
         if (!std::isfinite(inverse[k])) return false;
@@ -243,9 +253,13 @@ bool BlockTree::factor() {
         const std::size_t k = static_cast<std::size_t>(i);
         const int d = m_dim[k];
         double* pivot = m_blocks.data() + m_diagAt[k];
-        const bool inverted = d <= kUnrolled ? kInvert[static_cast<std::size_t>(d - 1)](pivot, d, pivot)
-                                             : invertDefinite<0>(pivot, d, pivot);
-        if (!inverted) return false;
+        if (m_inverted[k]) {
+            if (!m_leaf[k]) return false;
+        } else {
+            const bool inverted = d <= kUnrolled ? kInvert[static_cast<std::size_t>(d - 1)](pivot, d, pivot)
+                                                 : invertDefinite<0>(pivot, d, pivot);
+            if (!inverted) return false;
+        }
         const int p = m_parent[k];
         if (p < 0) continue;
         const int dp = m_dim[static_cast<std::size_t>(p)];

@@ -16,9 +16,10 @@ namespace afb::bullet {
 /// rooted at a body or at the one joint that holds the figure to the world.
 class BlockTree {
   public:
-    /// Lays out nodes of the given dimensions and parents (−1: a root); blocks are zeroed. False (and unusable)
-    /// when `parent` has a cycle or an out-of-range index.
-    bool reset(std::span<const int> dims, std::span<const int> parent);
+    /// Lays out nodes of the given dimensions and parents (−1: a root); blocks are zeroed, unless `zeroBlocks` is
+    /// false (a caller that writes every entry of every block). False (and unusable) when `parent` has a cycle or
+    /// an out-of-range index.
+    bool reset(std::span<const int> dims, std::span<const int> parent, bool zeroBlocks = true);
 
     int nodes() const { return static_cast<int>(m_dim.size()); }
     int dim(int i) const { return m_dim[static_cast<std::size_t>(i)]; }
@@ -30,6 +31,13 @@ class BlockTree {
     /// H_ii, row-major d_i × d_i; H_{i,p(i)}, row-major d_i × d_p. Filled by the caller before factor().
     double* diag(int i) { return m_blocks.data() + m_diagAt[static_cast<std::size_t>(i)]; }
     double* toParent(int i) { return m_blocks.data() + m_edgeAt[static_cast<std::size_t>(i)]; }
+
+    /// Whether node i has no children: its pivot is its own block H_ii.
+    bool leaf(int i) const { return m_leaf[static_cast<std::size_t>(i)] != 0; }
+    /// Marks diag(i) as holding H_ii⁻¹ already (written by the caller, transposed as factor() leaves a pivot's
+    /// inverse), for a leaf whose inverse is known (a body's M⁻¹): factor() then skips inverting it. Cleared by
+    /// reset(); factor() fails when the node is not a leaf.
+    void setInverted(int i) { m_inverted[static_cast<std::size_t>(i)] = 1; }
 
     /// Factors in place (the diagonal blocks become the pivots' inverses, stored transposed for solve()). False
     /// when a pivot is singular or not finite (every pivot must be definite, of either sign: no pivoting is done).
@@ -46,6 +54,7 @@ class BlockTree {
     std::vector<Step> m_steps;
     std::vector<int> m_dim, m_parent, m_offset, m_order; // m_order: every node after its children
     std::vector<std::size_t> m_diagAt, m_edgeAt, m_gainAt;
+    std::vector<char> m_leaf, m_inverted;
     std::vector<double> m_blocks, m_gain;             // m_gain: (D_i⁻¹ H_{i,p(i)})ᵀ per edge, after factor()
     std::vector<std::vector<int>> m_children;         // reset()'s scratch, kept for its capacity
     std::vector<std::pair<int, std::size_t>> m_stack; // (node, next child)

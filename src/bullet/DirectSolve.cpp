@@ -96,11 +96,22 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
     const std::vector<std::pair<int, int>>& pairs = group.pairs;
     const std::vector<std::vector<int>>& nodeRows = group.nodeRows;
     BlockTree& tree = group.tree;
-    if (!tree.reset(dims, parent)) return false;
-    // Bodies: M = diag(m, m, m, I_world).
+    // Every entry of every block is written below (the edges' by exactly one side of one row each).
+    if (!tree.reset(dims, parent, false)) return false;
+    // Bodies: M = diag(m, m, m, I_world); a leaf's pivot is M itself, so it gets M⁻¹ as Bullet keeps it.
     for (int x = 0; x < bodies; ++x) {
+        std::fill(tree.diag(x), tree.diag(x) + 36, 0.0);
         const btRigidBody* rb = bodyPool[group.bodies[static_cast<std::size_t>(x)]].m_originalBody;
         const btMatrix3x3& invInertia = rb->getInvInertiaTensorWorld();
+        const btVector3& local = rb->getInvInertiaDiagLocal();
+        if (tree.leaf(x) && local.x() > 0 && local.y() > 0 && local.z() > 0) {
+            double* inverseT = tree.diag(x);
+            for (int q = 0; q < 3; ++q) inverseT[7 * q] = double(rb->getInvMass());
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) inverseT[6 * (3 + r) + 3 + c] = double(invInertia[c][r]);
+            tree.setInverted(x);
+            continue;
+        }
         Eigen::Matrix3d ii;
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) ii(r, c) = double(invInertia[r][c]);
@@ -116,6 +127,7 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
     for (std::size_t j = 0; j < pairs.size(); ++j) {
         const int node = bodies + static_cast<int>(j);
         const int k = dims[static_cast<std::size_t>(node)];
+        std::fill(tree.diag(node), tree.diag(node) + k * k, 0.0);
         for (int slot = 0; slot < k; ++slot) {
             const int i = nodeRows[j][static_cast<std::size_t>(slot)];
             group.rowAt[static_cast<std::size_t>(i)] = tree.offset(node) + slot;
@@ -129,7 +141,7 @@ bool RagdollSolver::Direct::factorTree(Group& group, const btAlignedObjectArray<
                 double* e = up ? tree.toParent(node) : tree.toParent(b);
                 for (int q = 0; q < 6; ++q) {
                     const double v = -double(q < 3 ? side.lin[q] : side.ang[q - 3]);
-                    (up ? e[slot * 6 + q] : e[q * k + slot]) += v;
+                    (up ? e[slot * 6 + q] : e[q * k + slot]) = v;
                 }
             }
         }
@@ -185,11 +197,18 @@ bool RagdollSolver::Direct::groupJointRows(const btAlignedObjectArray<btSolverBo
     for (int i = 0; i < bodyCount; ++i) parent[static_cast<std::size_t>(i)] = i;
     auto root = [this](int i) { return unionRoot(i); };
     bool any = false;
+    // A constraint's rows are consecutive in the pool: one lookup per constraint, not per row.
+    const void* lastConstraint = nullptr;
+    bool lastDirect = false;
     for (int j = 0; j < pool.size(); ++j) {
         const btSolverConstraint& c = pool[j];
         if (c.m_lowerLimit > -unbounded || c.m_upperLimit < unbounded || c.m_jacDiagABInv == 0) continue;
-        const Tracked* tracked = trackedRows.find(btHashPtr(c.m_originalContactPoint));
-        if (tracked == nullptr || !tracked->direct) continue;
+        if (c.m_originalContactPoint != lastConstraint || lastConstraint == nullptr) {
+            const Tracked* tracked = trackedRows.find(btHashPtr(c.m_originalContactPoint));
+            lastConstraint = c.m_originalContactPoint;
+            lastDirect = tracked != nullptr && tracked->direct;
+        }
+        if (!lastDirect) continue;
         const bool da = dynamic(c.m_solverBodyIdA), db = dynamic(c.m_solverBodyIdB);
         if ((!da && !db) || (da && !unit(c.m_solverBodyIdA)) || (db && !unit(c.m_solverBodyIdB))) continue;
         bilateral[static_cast<std::size_t>(j)] = 1;

@@ -133,6 +133,7 @@ struct RagdollSolver::Direct {
         bool pending = false;        // its responses through the groups are not computed yet (complete())
         int blockIndex = -1;         // its index among the figure block's rows (−1: not in it yet)
         int normal = -1;             // a friction row in the block: its contact's block index (−1: none)
+        SideJ side[2]{};             // its Jacobian at body A and B, kept when it joins the block (couplingOf)
     };
 
     // buildDirect's parts, in order: the joint rows' groups (false: none), each group's factor, the other rows,
@@ -170,8 +171,8 @@ struct RagdollSolver::Direct {
     void gatherBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
     // Adds a completed row to the block with its couplings.
     void join(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool);
-    // The change of row r's velocity per unit impulse of row s.
-    double couplingOf(const FreeRow& r, const FreeRow& s, const btAlignedObjectArray<btSolverBody>& bodyPool) const;
+    // The change of row r's velocity per unit impulse of row s (both joined: their sides are kept).
+    double couplingOf(const FreeRow& r, const FreeRow& s) const;
     static bool dynamicBody(const btSolverBody& b) {
         return b.m_originalBody != nullptr && b.m_originalBody->getInvMass() > 0;
     }

@@ -16,20 +16,19 @@ using direct::sideA;
 using direct::sideB;
 using direct::SideJ;
 
-double RagdollSolver::Direct::couplingOf(const FreeRow& r, const FreeRow& s,
-                                         const btAlignedObjectArray<btSolverBody>& bodyPool) const {
+double RagdollSolver::Direct::couplingOf(const FreeRow& r, const FreeRow& s) const {
     const btSolverConstraint& cr = *r.c;
     const btSolverConstraint& cs = *s.c;
     double w = 0;
     for (int q = 0; q < 2; ++q) {
         const int id = q ? cr.m_solverBodyIdB : cr.m_solverBodyIdA;
-        const SideJ jr = q ? sideB(cr, bodyPool[id]) : sideA(cr, bodyPool[id]);
+        const SideJ& jr = r.side[q];
         for (int t = 0; t < 2; ++t) {
             const int g = s.group[t];
             if (g < 0) { // a body of no group: its own response, when it is this side's body
                 const int sid = t ? cs.m_solverBodyIdB : cs.m_solverBodyIdA;
                 if (sid != id) continue;
-                const SideJ js = t ? sideB(cs, bodyPool[sid]) : sideA(cs, bodyPool[sid]);
+                const SideJ& js = s.side[t];
                 w += double(jr.lin.dot(js.linInv)) + double(jr.ang.dot(js.angInv));
                 continue;
             }
@@ -44,6 +43,8 @@ double RagdollSolver::Direct::couplingOf(const FreeRow& r, const FreeRow& s,
 void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool) {
     const int k = static_cast<int>(block.rows.size());
     fr.blockIndex = k;
+    fr.side[0] = sideA(*fr.c, bodyPool[fr.c->m_solverBodyIdA]);
+    fr.side[1] = sideB(*fr.c, bodyPool[fr.c->m_solverBodyIdB]);
     block.rows.push_back(&fr);
     if (block.links.size() < block.rows.size()) block.links.emplace_back();
     auto& mine = block.links[static_cast<std::size_t>(k)];
@@ -54,8 +55,8 @@ void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolve
         if (block.seen[static_cast<std::size_t>(j)] == k) return;
         block.seen[static_cast<std::size_t>(j)] = k;
         const FreeRow& other = *block.rows[static_cast<std::size_t>(j)];
-        mine.emplace_back(j, couplingOf(fr, other, bodyPool));
-        block.links[static_cast<std::size_t>(j)].emplace_back(k, couplingOf(other, fr, bodyPool));
+        mine.emplace_back(j, couplingOf(fr, other));
+        block.links[static_cast<std::size_t>(j)].emplace_back(k, couplingOf(other, fr));
     };
     for (int t = 0; t < 2; ++t)
         if (fr.group[t] >= 0)
@@ -75,7 +76,7 @@ void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolve
         }
         block.plainDynamic.push_back(k);
     }
-    mine.emplace_back(k, couplingOf(fr, fr, bodyPool));
+    mine.emplace_back(k, couplingOf(fr, fr));
     for (int t = 0; t < 2; ++t)
         if (fr.group[t] >= 0 && !(t == 1 && fr.group[0] == fr.group[1]))
             block.ofGroup[static_cast<std::size_t>(fr.group[t])].push_back(k);

@@ -110,7 +110,8 @@ class JointTree {
     // within its tolerance already, or the factorisation fails.
     template <typename RowsOf>
     bool step(std::vector<Side>& sides, RowsOf rowsOf) {
-        if (!measure(rowsOf) || !m_tree.reset(m_dims, m_parent)) return false;
+        // assembleBodies and assembleJoints write every entry of every block.
+        if (!measure(rowsOf) || !m_tree.reset(m_dims, m_parent, false)) return false;
         assembleBodies(sides);
         assembleJoints(sides);
         if (!m_tree.factor()) return false;
@@ -152,6 +153,15 @@ class JointTree {
                 continue;
             }
             const btVector3& il = s.invInertiaLocal;
+            if (m_tree.leaf(x) && s.invMass > 0 && il.x() > 0 && il.y() > 0 && il.z() > 0) {
+                // Its pivot is M: M⁻¹ as the side keeps it, transposed as factor() stores an inverse.
+                for (int q = 0; q < 3; ++q) {
+                    d[7 * q] = double(s.invMass);
+                    for (int c = 0; c < 3; ++c) d[6 * (3 + q) + 3 + c] = double(s.invInertia[c][q]);
+                }
+                m_tree.setInverted(x);
+                continue;
+            }
             const auto inv = [](btScalar v) { return v > 0 ? 1 / v : btScalar(1e12); };
             const btMatrix3x3 inertia = s.r.scaled(btVector3(inv(il.x()), inv(il.y()), inv(il.z()))) * s.r.transpose();
             for (int q = 0; q < 3; ++q) {

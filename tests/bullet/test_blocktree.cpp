@@ -66,8 +66,8 @@ Case randomTree(int nodes, std::mt19937& rng) {
     return c;
 }
 
-bool load(BlockTree& tree, const Case& c) {
-    if (!tree.reset(c.dims, c.parent)) return false;
+// Writes every entry of every block of `c` into a tree laid out for it.
+void fill(BlockTree& tree, const Case& c) {
     for (int i = 0; i < tree.nodes(); ++i) {
         const int d = tree.dim(i);
         double* diag = tree.diag(i);
@@ -80,6 +80,11 @@ bool load(BlockTree& tree, const Case& c) {
         for (int r = 0; r < d; ++r)
             for (int col = 0; col < dp; ++col) edge[r * dp + col] = c.dense(tree.offset(i) + r, tree.offset(p) + col);
     }
+}
+
+bool load(BlockTree& tree, const Case& c) {
+    if (!tree.reset(c.dims, c.parent)) return false;
+    fill(tree, c);
     return true;
 }
 
@@ -195,4 +200,91 @@ TEST_CASE("block tree: a reset to the same layout zeroes the blocks and solves a
         reused.solve(x.data());
         CHECK(x == expected); // bit for bit
     }
+}
+
+TEST_CASE("block tree: leaves given their inverse solve as leaves given their block", "[bullet][blocktree]") {
+    // A body without child joints has its own block as its pivot: the caller may hand in its inverse (a body's M⁻¹
+    // as Bullet keeps it) and factor() takes it as is. Any node with children refuses one.
+    std::mt19937 rng(29);
+    for (int trial = 0; trial < 10; ++trial) {
+        const Case c = randomTree(4 + trial, rng);
+        BlockTree plain, given;
+        REQUIRE(load(plain, c));
+        REQUIRE(plain.factor());
+        REQUIRE(load(given, c));
+        int leaves = 0;
+        for (int i = 0; i < given.nodes(); ++i) {
+            bool hasChild = false;
+            for (int k = 0; k < given.nodes(); ++k) hasChild = hasChild || given.parent(k) == i;
+            CHECK(given.leaf(i) == !hasChild);
+            if (!given.leaf(i)) continue;
+            const int d = given.dim(i), at = given.offset(i);
+            const Eigen::MatrixXd inverse = c.dense.block(at, at, d, d).inverse();
+            for (int r = 0; r < d; ++r)
+                for (int col = 0; col < d; ++col) given.diag(i)[r * d + col] = inverse(col, r); // transposed
+            given.setInverted(i);
+            ++leaves;
+        }
+        REQUIRE(leaves > 0);
+        REQUIRE(given.factor());
+        Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(c.dense.rows(), -2.0, 3.0);
+        Eigen::VectorXd x = b, y = b;
+        plain.solve(x.data());
+        given.solve(y.data());
+        INFO("trial " << trial);
+        CHECK((c.dense * y - b).norm() <= 1e-10 * (1.0 + b.norm()));
+        CHECK((x - y).norm() <= 1e-9 * (1.0 + x.norm()));
+    }
+    BlockTree tree;
+    REQUIRE(tree.reset(std::vector<int>{1, 1}, std::vector<int>{-1, 0}));
+    tree.diag(0)[0] = 1.0;
+    tree.diag(1)[0] = -1.0;
+    tree.toParent(1)[0] = 0.5;
+    CHECK_FALSE(tree.leaf(0));
+    tree.setInverted(0); // the root has a child: its pivot is not its block
+    CHECK_FALSE(tree.factor());
+}
+
+TEST_CASE("block tree: a pivot's inverse is symmetric to the bit", "[bullet][blocktree]") {
+    // One node of each size: its inverse (the root's pivot, read back after factor()) is computed once per pair of
+    // entries, so it is exactly symmetric, and it inverts the block.
+    std::mt19937 rng(5);
+    for (int d = 1; d <= 9; ++d) {
+        const Eigen::MatrixXd m = definite(d, d % 2 == 0, rng);
+        BlockTree tree;
+        REQUIRE(tree.reset(std::vector<int>{d}, std::vector<int>{-1}));
+        for (int r = 0; r < d; ++r)
+            for (int c = 0; c < d; ++c) tree.diag(0)[r * d + c] = m(r, c);
+        REQUIRE(tree.factor());
+        Eigen::MatrixXd inverse(d, d);
+        for (int r = 0; r < d; ++r)
+            for (int c = 0; c < d; ++c) inverse(r, c) = tree.diag(0)[r * d + c];
+        INFO("size " << d);
+        CHECK(inverse == inverse.transpose());
+        CHECK((m * inverse - Eigen::MatrixXd::Identity(d, d)).norm() <= 1e-12 * d);
+    }
+}
+
+TEST_CASE("block tree: a reset that keeps the blocks solves as a fresh tree once every entry is written",
+          "[bullet][blocktree]") {
+    // reset(..., false) skips zeroing for a caller that writes every block (the direct solve, the position tree).
+    std::mt19937 rng(13);
+    const Case first = randomTree(9, rng);
+    Case second = first;
+    second.dense *= 0.75;
+    std::vector<double> b(static_cast<std::size_t>(first.dense.rows()), 0.5);
+    BlockTree fresh;
+    REQUIRE(load(fresh, second));
+    REQUIRE(fresh.factor());
+    std::vector<double> expected = b;
+    fresh.solve(expected.data());
+    BlockTree reused;
+    REQUIRE(load(reused, first));
+    REQUIRE(reused.factor());
+    REQUIRE(reused.reset(second.dims, second.parent, false));
+    fill(reused, second);
+    REQUIRE(reused.factor());
+    std::vector<double> x = b;
+    reused.solve(x.data());
+    CHECK(x == expected);
 }
