@@ -20,8 +20,8 @@ namespace {
 // One line per method name that --method takes.
 std::string_view presetSummary(std::string_view name) {
     if (name == "fast")
-        return "Bullet's iterative solve with afbullet's rows and 2 position sweeps; cheapest that never "
-               "explodes";
+        return "the default's direct joint solve in block mode: 2 iterations, 2 position sweeps, an anchor tree "
+               "step; the cheap one";
     if (name == "iterative")
         return "the default without the direct joint solve (what a world without a RagdollSolver runs)";
     if (name == "default")

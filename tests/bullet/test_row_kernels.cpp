@@ -143,8 +143,9 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
           "[bullet][rows]") {
     const auto loaded = test::loadEntity("humanoid");
     const auto asset = bullet::RagdollAsset::create(loaded.figure);
-    // `fast` solves its joints, limits and contacts in Bullet's iterations; `default` solves only its free rows
-    // there when its direct solve declines an island, so `fast` is the method that exercises every row kind. The
+    // `iterative` solves its joints, limits and contacts in Bullet's iterations; `default` and `fast` solve only
+    // their free rows there when their direct solve declines an island, so `iterative` is the method that
+    // exercises every row kind. The
     // solver modes that change Bullet's loop (contacts interleaved with their friction, two friction directions,
     // the order randomised, which RagdollSolver leaves to Bullet's own loop) each get a run.
     struct Variant {
@@ -152,13 +153,13 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
         int solverMode; // added to the method's
     };
     const Variant variants[] = {
-        {"fast", 0},
+        {"iterative", 0},
         {"legacy", 0},
-        {"fast", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS},
-        {"fast", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS | SOLVER_USE_2_FRICTION_DIRECTIONS},
-        {"fast", SOLVER_RANDMIZE_ORDER},
+        {"iterative", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS},
+        {"iterative", SOLVER_INTERLEAVE_CONTACT_AND_FRICTION_CONSTRAINTS | SOLVER_USE_2_FRICTION_DIRECTIONS},
+        {"iterative", SOLVER_RANDMIZE_ORDER},
     };
-    std::vector<figure::Transform> plainFast; // `fast`'s final pose in its own solver mode
+    std::vector<figure::Transform> plainIterative; // `iterative`'s final pose in its own solver mode
     for (const Variant& variant : variants) {
         const char* name = variant.method;
         std::vector<std::vector<figure::Transform>> finals;
@@ -188,11 +189,11 @@ TEST_CASE("row kernels: a drop stepped with SIMD rows ends where Bullet's scalar
             moved = moved || (finals[0][i].position - spawned[i].position).norm() > 0.5;
         }
         CHECK(moved); // it fell and landed: contacts, limits and friction were solved
-        if (std::string(name) == "fast" && variant.solverMode == 0) plainFast = finals[0];
+        if (std::string(name) == "iterative" && variant.solverMode == 0) plainIterative = finals[0];
         if (variant.solverMode != 0) { // the mode took effect: Bullet's loop ran differently
             bool differs = false;
             for (std::size_t i = 0; i < finals[0].size(); ++i)
-                differs = differs || finals[0][i].position != plainFast[i].position;
+                differs = differs || finals[0][i].position != plainIterative[i].position;
             CHECK(differs);
         }
     }
@@ -210,7 +211,7 @@ TEST_CASE("row kernels: islands solved in turn end as in Bullet's order, to the 
         int mostInTurn = 0;
     };
     const auto run = [&](bool simd) {
-        sim::Scene scene(*bullet::methodPreset("fast"));
+        sim::Scene scene(*bullet::methodPreset("iterative"));
         auto* solver = dynamic_cast<bullet::RagdollSolver*>(scene.world().getConstraintSolver());
         REQUIRE(solver != nullptr);
         solver->setSimdRows(simd);

@@ -214,10 +214,10 @@ add_test(NAME cli.help_examples
   COMMAND ${CMAKE_COMMAND} "-DAFB=$<TARGET_FILE:afb>" -P ${CMAKE_CURRENT_LIST_DIR}/help_examples.cmake)
 # afb methods: every method with its summary and every knob with its values and default; one method's knobs, those
 # that differ from the default marked; JSON; a misspelt method.
-afb_cli_test(methods_list 0 ARGS methods MATCH "  fast +Bullet's iterative solve" "  raw +plain Bullet"
+afb_cli_test(methods_list 0 ARGS methods MATCH "  fast +the default's direct joint solve in block mode" "  raw +plain Bullet"
              "  substeps +INT +1 +Substeps per frame" "  split-impulse +on\\|off +on ")
-afb_cli_test(methods_one 0 ARGS methods fast MATCH "  joint-iterations +0 +\\(default: 20\\)" "  substeps +1\n")
-afb_cli_test(methods_json 0 ARGS methods fast --json MATCH "\"name\": \"fast\"" "\"friction-directions\": \"1\"")
+afb_cli_test(methods_one 0 ARGS methods fast MATCH "  figure-iterations +2 +\\(default: 0\\)" "  substeps +1\n")
+afb_cli_test(methods_json 0 ARGS methods fast --json MATCH "\"name\": \"fast\"" "\"position-tree\": \"1\"")
 afb_cli_test(methods_misspelt 2 ARGS methods fsat MATCH "unknown method 'fsat'; did you mean 'fast'\\?")
 # The drop table: bodies per instance, a legend, and the method as chart and stress spell it.
 afb_cli_test(drop_table_legend 0 ARGS drop --base . humanoid --count 2 --steps 2 --method fast --iterations 8

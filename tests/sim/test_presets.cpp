@@ -36,7 +36,7 @@ TEST_CASE("presets: the humanoid's 1 m drop stays within each preset's bounds", 
         // figures and four yaws (docs/methods.md: the presets) plus a margin, not this yaw's value. 4 s: at 3 s
         // `exact`'s feet
         // were still settling.
-        {"fast", preset("fast"), 0.025, 16, 0.005},           // measured 21.5 mm, 13.3°, 2.7 mm (4 × 4: 14°)
+        {"fast", preset("fast"), 0.001, 3, 0.005},            // measured 0.1 mm, 1.3°, 0.02 mm (4 × 4: 1.9°)
         {"iterative", preset("iterative"), 0.024, 13, 0.005}, // 19.9 mm, 10.0°, 2.7 mm (11°)
         {"accurate", preset("accurate"), 0.012, 5, 0.005},    // 8.8 mm, 3.4°, 2.3 mm (4.5°)
         // The direct joint solve, the tree position step with limits: 0.1 mm, 0.02°, 0.3 mm. The accuracy
