@@ -157,8 +157,8 @@ struct Method {
     /// product over those rows instead of a pass over every body of the figure per row, so contacts and limits
     /// converge within each iteration and few iterations are needed. A game's bodies in the same island are solved
     /// in these iterations too; rows between a game's bodies alone then take the rest of the world's iterations.
-    /// A solve holding a ragdoll with motors (soft rows) takes its rows one at a time whatever this says. Off (0)
-    /// in every preset (docs/methods.md has its measurements).
+    /// A solve holding a ragdoll with motors (soft rows) takes its rows one at a time whatever this says. 2 in fast,
+    /// off (0) in the other presets (docs/methods.md has its measurements).
     int figureIterations = 0;
     /// Gauss–Seidel sweeps over the block in each iteration of block mode (figureIterations); they stop early once
     /// no row's velocity changes by more than the square root of solverTolerance.
@@ -180,7 +180,7 @@ struct Method {
     /// spin about the bisector of the two shafts, a row that always exists) instead of btConeTwistConstraint with a
     /// twist span of 0, whose twist row exists only while the twist is above zero and whose axis turns over with
     /// its sign: at rest the hips, shoulders and waist toggle it, and a leg held by joint friction is kicked every
-    /// few steps (docs/stability.md). On in default and accurate; off in fast, iterative and legacy
+    /// few steps (docs/stability.md). On in fast, default and accurate; off in iterative and legacy
     /// (iterativeJoints turns it off: under Bullet's iterative joint solve the cone-twist holds the hips better).
     /// Rigid backend.
     bool constantVelocityUniversal = true;
@@ -201,7 +201,8 @@ struct Method {
     friend bool operator==(const Method&, const Method&) = default;
 };
 
-/// The named presets: "fast", "iterative" (the default's knobs with Bullet's iterative joint solve, iterativeJoints),
+/// The named presets: "fast" (the default's direct joint solve in block mode: 2 iterations, 2 position sweeps, a tree
+/// step over the anchors), "iterative" (the default's knobs with Bullet's iterative joint solve, iterativeJoints),
 /// "default", "accurate", "exact" (the default's method under its earlier name, which recorded results still carry),
 /// "legacy" (afbullet 0.1's method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for
 /// comparison) and "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
