@@ -181,9 +181,9 @@ btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolve
         return d.resolveInTurn(bodies, m_tmpSolverContactConstraintPool,
                                m_tmpSolverContactRollingFrictionConstraintPool, m_resolveSingleConstraintRowGeneric,
                                iteration, contacts,
-                               d.blockIterations == 0 ? Direct::InTurn::All : Direct::InTurn::OutsideBlock);
+                               d.figureIterations == 0 ? Direct::InTurn::All : Direct::InTurn::OutsideBlock);
     };
-    if (d.blockIterations == 0) {
+    if (d.figureIterations == 0) {
         // The joints exactly, then every other row in turn, those through the groups with the groups' response.
         const double residual = d.solveJoints(bodies, joints);
         return static_cast<btScalar>(std::max(residual, inTurn(iteration < infoGlobal.m_numIterations)));

@@ -159,16 +159,8 @@ bool RagdollSolver::buildDirect() {
     d.clear();
     if (!d.groupJointRows(m_tmpSolverBodyPool, m_tmpSolverNonContactConstraintPool, m_rows)) return false;
     d.factorGroups(m_tmpSolverBodyPool, m_tmpSolverNonContactConstraintPool);
-    // Block mode takes ragdolls whose joints are all stiff. With motors (soft rows in the joint solve) the block
-    // left a weightless humanoid's 4 Hz motors oscillating about their target (0.66° after 4 s against 0.30°
-    // row by row), so a solve holding a motor-driven ragdoll takes its rows one at a time.
-    // Soft rows are those with a cfm: an unbounded motor's in the joint solve, a bounded one's among the free rows.
-    const auto& pool = m_tmpSolverNonContactConstraintPool;
-    bool soft = d.figureIterations > 0 && std::ranges::any_of(d.live(), [](const Direct::Group& g) { return g.soft; });
-    for (int j = 0; d.figureIterations > 0 && j < pool.size() && !soft; ++j)
-        soft = pool[j].m_cfm != 0 && (d.groupOf[static_cast<std::size_t>(pool[j].m_solverBodyIdA)] >= 0 ||
-                                      d.groupOf[static_cast<std::size_t>(pool[j].m_solverBodyIdB)] >= 0);
-    d.blockIterations = soft ? 0 : d.figureIterations;
+    // Block mode (figureIterations) takes ragdolls with motors too: an unbounded motor is a soft row of the joint
+    // solve (its cfm in the factorisation, its reactions kept up to date), a bounded one a soft row of the block.
     d.collectFreeRows(m_tmpSolverNonContactConstraintPool, m_tmpSolverContactConstraintPool,
                       m_tmpSolverContactFrictionConstraintPool);
     d.prepareColumns(m_tmpSolverBodyPool);

@@ -207,7 +207,6 @@ struct RagdollSolver::Direct {
     bool enabled = false;
     bool frictionThroughGroups = false; // Method::frictionThroughFigure
     int figureIterations = 0;           // Method::figureIterations (0: the rows through groups one at a time)
-    int blockIterations = 0;            // this solve's: figureIterations, or 0 when it holds a ragdoll's soft rows
     int figureSweeps = 0;               // Method::figureSweeps
     double figureTolerance = 0;         // the block's sweeps stop once no row's velocity moves by its root (m²/s²)
     // The figure block (solveFigureBlock) of this step: every row that has joined it (a row joins when it first

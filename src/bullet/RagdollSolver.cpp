@@ -48,15 +48,15 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
     // through the groups' responses too, so that lifting a foot out of the ground lifts the leg with it.
     if (infoGlobal.m_splitImpulse) solveDirectSplitImpulse(infoGlobal);
     // Block mode has its own count (Method::figureIterations); every row takes part in each of its iterations.
-    const int iterations = m_direct->blockIterations > 0
-                               ? m_direct->blockIterations
+    const int iterations = m_direct->figureIterations > 0
+                               ? m_direct->figureIterations
                                : std::max(m_maxOverrideNumSolverIterations, infoGlobal.m_numIterations);
     m_direct->figureTolerance = double(infoGlobal.m_leastSquaresResidualThreshold);
     for (int iteration = 0; iteration < iterations; ++iteration) {
         m_leastSquaresResidual = solveDirectIteration(iteration, infoGlobal);
         if (m_leastSquaresResidual <= infoGlobal.m_leastSquaresResidualThreshold) break;
     }
-    if (m_direct->blockIterations > 0) solveDirectOutsideGroups(iterations, infoGlobal);
+    if (m_direct->figureIterations > 0) solveDirectOutsideGroups(iterations, infoGlobal);
     // The joint rows' impulses (the block's and the reactions to the other rows) for warm starting and Bullet.
     for (auto* list : {&m_direct->nonContact, &m_direct->contact, &m_direct->friction})
         for (const Direct::FreeRow& fr : *list)

@@ -165,8 +165,11 @@ TEST_CASE("methods: without a RagdollSolver the default falls back to the iterat
         CHECK(solver.directJoints());
     }
     CHECK(afb::bullet::methodInForce(def, true) == def);
-    const Method fast = *afb::bullet::methodPreset("fast");
-    CHECK(afb::bullet::methodInForce(fast, false) == fast); // nothing to fall back from
+    const Method iterative = *afb::bullet::methodPreset("iterative");
+    CHECK(afb::bullet::methodInForce(iterative, false) == iterative); // nothing to fall back from
+    const Method fast = *afb::bullet::methodPreset("fast"); // block mode of the direct solve: falls back too
+    CHECK_FALSE(afb::bullet::methodInForce(fast, false).directJoints);
+    CHECK(afb::bullet::methodInForce(fast, false).figureIterations == 0);
 }
 
 TEST_CASE("position pass: a separated joint is closed within one step", "[bullet][methods]") {

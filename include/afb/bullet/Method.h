@@ -157,8 +157,8 @@ struct Method {
     /// product over those rows instead of a pass over every body of the figure per row, so contacts and limits
     /// converge within each iteration and few iterations are needed. A game's bodies in the same island are solved
     /// in these iterations too; rows between a game's bodies alone then take the rest of the world's iterations.
-    /// A solve holding a ragdoll with motors (soft rows) takes its rows one at a time whatever this says. 2 in fast,
-    /// off (0) in the other presets (docs/methods.md has its measurements).
+    /// Motors are soft rows of the same solve. 2 in fast, off (0) in the other presets (docs/methods.md has its
+    /// measurements).
     int figureIterations = 0;
     /// Gauss–Seidel sweeps over the block in each iteration of block mode (figureIterations); they stop early once
     /// no row's velocity changes by more than the square root of solverTolerance.
