@@ -167,7 +167,7 @@ TEST_CASE("methods: without a RagdollSolver the default falls back to the iterat
     CHECK(afb::bullet::methodInForce(def, true) == def);
     const Method iterative = *afb::bullet::methodPreset("iterative");
     CHECK(afb::bullet::methodInForce(iterative, false) == iterative); // nothing to fall back from
-    const Method fast = *afb::bullet::methodPreset("fast"); // block mode of the direct solve: falls back too
+    const Method fast = *afb::bullet::methodPreset("fast");           // block mode of the direct solve: falls back too
     CHECK_FALSE(afb::bullet::methodInForce(fast, false).directJoints);
     CHECK(afb::bullet::methodInForce(fast, false).figureIterations == 0);
 }
