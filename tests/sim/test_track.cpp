@@ -1,5 +1,5 @@
-// Tracking runs (afb track): a powered ragdoll following a walk, limp against powered, a hit and its recovery, the
-// legs of a figure, and a real Doom 3 walk from the corpus.
+// Tracking runs (afb track): a powered ragdoll following a walk and an idle, limp against powered, a hit and its
+// recovery, the legs of a figure, and a real Doom 3 walk from the corpus.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -116,6 +116,37 @@ TEST_CASE("track: the legs keyframed, the humanoid stands and follows its walk o
     CHECK(r.keyframed == std::vector<std::string>{"l_thigh", "l_shin", "l_foot", "r_thigh", "r_shin", "r_foot"});
     CHECK_FALSE(r.exploded);
     CHECK(r.trackingRmsM < 0.08); // measured 0.046 m: the pelvis is held by both hips
+}
+
+TEST_CASE("track: the humanoid's idle loops seamlessly inside its limits and is followed closely", "[sim][track]") {
+    const auto loaded = test::loadEntity("humanoid");
+    const decl::Md5Anim idle = loadAnim(test::sourceDir() / "models/md5/humanoid/idle.md5anim");
+    // The last frame is the first again (the engine loops over numFrames - 1 frames): no jump at the seam.
+    REQUIRE(idle.frames.size() == 97);
+    CHECK(idle.frames.front() == idle.frames.back());
+    sim::TrackOptions o = threeSeconds();
+    o.seconds = 4.5; // one whole cycle after the warm-up
+    const sim::TrackResult hanging = track(loaded.figure, idle, o);
+    o.root = sim::TrackRoot::Free;
+    const sim::TrackResult standing = track(loaded.figure, idle, o);
+    INFO("root keyframed: " << hanging.trackingRmsM << " m rms, " << hanging.trackingMaxM << " m max, "
+                            << hanging.trackingRmsDeg << " deg rms; legs keyframed: " << standing.trackingRmsM
+                            << " m rms, " << standing.trackingMaxM << " m max, " << standing.trackingRmsDeg
+                            << " deg rms");
+    CHECK(hanging.loopSeconds == Approx(4.0));
+    // Every pose of the idle lies inside the humanoid's joint limits, so every error is the motors'.
+    CHECK(hanging.animLimitExcessDeg == 0);
+    CHECK(standing.animLimitExcessDeg == 0);
+    CHECK_FALSE(hanging.exploded);
+    CHECK_FALSE(standing.exploded);
+    // Measured at 60 Hz: hanging from the pelvis 0.021 m and 2.8 deg rms, 0.064 m max (a fingertip, at the end of the
+    // arm's chain); standing on keyframed legs 0.033 m and 2.7 deg rms. The bounds leave about half as much again, and
+    // stay below the walk's, whose limbs swing far further.
+    CHECK(hanging.trackingRmsM < 0.032);
+    CHECK(hanging.trackingRmsDeg < 4.2);
+    CHECK(hanging.trackingMaxM < 0.1);
+    CHECK(standing.trackingRmsM < 0.05);
+    CHECK(standing.trackingRmsDeg < 4.2);
 }
 
 TEST_CASE("track: the zsec machinegun walk of the corpus, root keyframed at 60 Hz", "[sim][track][corpus]") {
