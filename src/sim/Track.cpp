@@ -16,6 +16,7 @@
 #include "afb/figure/Placement.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
 
 namespace afb::sim {
 namespace {
@@ -255,6 +256,8 @@ struct TrackLoop {
         std::vector<StepErrors> perStep;
         double sumM2 = 0, sumDeg2 = 0, cpu = 0, awakeCpu = 0, wall = 0;
         long long samples = 0;
+        const double gravity = doll.figure().units.gravityMps2;
+        const double energy0 = figureEnergyJ(doll.figure(), doll.bodyStates(), gravity);
         if (observer) observer(0, doll.bodyTransforms());
         for (int k = 0; k < steps; ++k) {
             const double t1 = (k + 1) * dt;
@@ -278,6 +281,8 @@ struct TrackLoop {
             ++r.steps;
             if (observer) observer(k + 1, doll.bodyTransforms());
             checkExplosion(doll, t1, r);
+            r.maxEnergyGainJ =
+                std::max(r.maxEnergyGainJ, figureEnergyJ(doll.figure(), doll.bodyStates(), gravity) - energy0);
             const std::vector<Transform> bodies = doll.bodyTransforms();
             const std::vector<Transform> sim = simulatedJoints(doll.figure(), bodies, *joints);
             double m2 = 0, deg2 = 0;

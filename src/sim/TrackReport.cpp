@@ -60,6 +60,10 @@ const std::vector<TrackField>& trackFields() {
         {"max_speed_mps", "fastest body", [](const R& r) { return json(r.maxSpeedMps); }},
         {"max_anchor_error_m", "largest separation of a constraint's two anchor copies",
          [](const R& r) { return json(r.maxAnchorErrorM); }},
+        {"max_energy_gain_j",
+         "largest kinetic + potential energy above the start; holding a still pose it must stay 0 (the motors "
+         "start relaxed), on a moving animation it counts the animation's work",
+         [](const R& r) { return json(r.maxEnergyGainJ); }},
         {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
          [](const R& r) { return json(r.exploded); }},
         {"exploded_at_s", "when it first exploded", [](const R& r) { return jsonOrNull(r.explodedAtS); }},

@@ -76,6 +76,12 @@ struct TrackResult {
     /// and its constraint: a floor under the tracking errors, since the limits hold and no motor pulls past them.
     double animLimitExcessDeg = 0;
     std::string animLimitJoint;
+    /// The largest kinetic + potential energy of the figure's bodies above its start, J (gravity along −Z; the
+    /// keyframed bodies included). The motors are springs and dampers that start relaxed on the animation's first
+    /// frame: holding a still pose (a one-frame animation) with still keyframed bodies, they and the joints can only
+    /// take energy out, so a gain there is the solver's. On a moving animation the keyframed bodies and the motors
+    /// do work on the figure: there it measures the animation too.
+    double maxEnergyGainJ = 0;
     bool exploded = false; ///< NaN, a speed over kExplodeSpeedMps or an anchor error over kExplodeAnchorM
     std::optional<double> explodedAtS;
     double maxSpeedMps = 0, maxAnchorErrorM = 0;
