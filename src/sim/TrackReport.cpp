@@ -47,6 +47,12 @@ const std::vector<TrackField>& trackFields() {
          "largest excess of the animation's own pose over the figure's joint limits: a floor under the errors",
          [](const R& r) { return json(r.animLimitExcessDeg); }},
         {"anim_limit_joint", "the constraint where it happened", [](const R& r) { return json(r.animLimitJoint); }},
+        {"cut_max_rel_rad_s",
+         "largest angular speed of a simulated body joined to a keyframed one relative to its target, after the "
+         "warm-up",
+         [](const R& r) { return json(r.cutMaxRelRadS); }},
+        {"cut_body", "the body where it happened (empty when no body lies at the cut)",
+         [](const R& r) { return json(r.cutBody); }},
         {"hit_body", "the body --hit struck (empty without one)", [](const R& r) { return json(r.hitBody); }},
         {"hit_at_s", "when it struck", [](const R& r) { return jsonOrNull(r.hitAtS); }},
         {"pre_hit_max_m", "largest joint distance between the warm-up and the hit (0 without a hit)",
