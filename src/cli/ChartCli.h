@@ -24,6 +24,9 @@ struct ChartCli {
     std::string precision;
     bool noSleep = false;
     std::optional<double> maxAnchor, maxLimit, maxPenetration, maxSettle;
+    /// afb chart --track: the md5anim of the tracking panel (empty: the chart of drops) and its motor strengths.
+    std::filesystem::path trackAnim;
+    std::vector<double> strengths = {0.25, 0.5, 1, 2, 4};
 };
 
 /// Registers afb chart's options on `cmd` (afb chart, afb plan chart).

@@ -182,6 +182,79 @@ std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<C
     return {};
 }
 
+std::string writeTrackChartPlot(const std::filesystem::path& dir, const std::vector<sim::TrackChartPoint>& points,
+                                const std::string& subtitle) {
+    // track.dat: one block per figure and method (in the order of the points), by strength: cost, min, max, mm,
+    // degrees, label.
+    std::ostringstream data;
+    std::vector<std::string> titles;
+    double xLo = 1e300, xHi = 0, mmLo = 1e300, mmHi = 0, degLo = 1e300, degHi = 0;
+    for (std::size_t i = 0; i < points.size();) {
+        std::size_t end = i;
+        while (end < points.size() && points[end].figure == points[i].figure && points[end].label == points[i].label)
+            ++end;
+        std::vector<sim::TrackChartPoint> line(points.begin() + static_cast<std::ptrdiff_t>(i),
+                                               points.begin() + static_cast<std::ptrdiff_t>(end));
+        std::stable_sort(line.begin(), line.end(),
+                         [](const auto& a, const auto& b) { return a.strength < b.strength; });
+        titles.push_back(points[i].figure + " " + points[i].label);
+        data << "# " << cell(titles.back()) << ": cost_us cost_min cost_max tracking_rms_mm tracking_rms_deg label\n";
+        for (const sim::TrackChartPoint& p : line) {
+            const double mm = std::max(p.trackingRmsMm, kFloor), deg = std::max(p.trackingRmsDeg, kFloor);
+            data << plotNumber(std::max(p.costUs, kFloor)) << '\t' << plotNumber(std::max(p.costMinUs, kFloor)) << '\t'
+                 << plotNumber(std::max(p.costMaxUs, kFloor)) << '\t' << plotNumber(mm) << '\t' << plotNumber(deg)
+                 << "\t×" << plotNumber(p.strength) << (p.exploded ? " ✗" : "") << '\n';
+            xLo = std::min(xLo, std::max(p.costMinUs, kFloor));
+            xHi = std::max(xHi, std::max(p.costMaxUs, kFloor));
+            mmLo = std::min(mmLo, mm), mmHi = std::max(mmHi, mm);
+            degLo = std::min(degLo, deg), degHi = std::max(degHi, deg);
+        }
+        data << "\n\n";
+        i = end;
+    }
+    if (titles.empty()) return "no tracking points to plot";
+
+    std::ostringstream gp;
+    gp << "# afb chart --track: tracking error against cost. Regenerate the pictures with\n"
+       << "#   gnuplot track.gp      (in this folder; writes track.png and track.svg)\n"
+       << "set datafile separator \"\\t\"\nset encoding utf8\n";
+    for (std::size_t k = 0; k < titles.size(); ++k)
+        gp << "set linetype " << k + 1 << " lc rgb " << quoted(kColours[k % kColourCount]) << " lw 1.5 pt 7 ps 1.1\n";
+    const char* terminals[][2] = {{"pngcairo size 1600,700 font \"DejaVu Sans,11\" noenhanced", "track.png"},
+                                  {"svg size 1600,700 font \"DejaVu Sans,11\" noenhanced", "track.svg"}};
+    const std::pair<int, std::string> panels[] = {{4, "tracking rms, mm"}, {5, "tracking rms, degrees"}};
+    for (const auto& [terminal, file] : terminals) {
+        gp << "\nset terminal " << terminal << "\nset output " << quoted(file) << "\n"
+           << "set multiplot layout 1,2 title \"afb chart: tracking error against cost\\n"
+           << quoted(subtitle).substr(1) << "\nset logscale xy\nset grid xtics ytics mxtics mytics lc rgb \"#dddddd\"\n"
+           << "set key top right box opaque\n"
+           << "set xlabel \"cost: CPU µs per awake body-step (median, bars: min–max of the repeats)\"\n"
+           << "set xrange [" << plotNumber(xLo / 1.5) << ":" << plotNumber(xHi * 3) << "]\n"
+           << "set xtics (" << ticList(xLo / 1.5, xHi * 3) << ")\n";
+        for (const auto& [column, title] : panels) {
+            const double lo = column == 4 ? mmLo / 2 : degLo / 2, hi = column == 4 ? mmHi * 2 : degHi * 2;
+            gp << "set ylabel " << quoted(title) << "\nset yrange [" << plotNumber(lo) << ":" << plotNumber(hi)
+               << "]\nset ytics (" << ticList(lo, hi) << ")\nset title "
+               << quoted(title + " against cost; labels: motor strength") << "\nplot ";
+            for (std::size_t k = 0; k < titles.size(); ++k) {
+                const std::string index = "\"track.dat\" index " + std::to_string(k);
+                gp << (k > 0 ? ", \\\n     " : "") << index << " using 1:" << column << ":2:3 with xerrorbars lt "
+                   << k + 1 << " title " << quoted(titles[k]) << ", \\\n     " << index << " using 1:" << column
+                   << " with lines lt " << k + 1 << " notitle, \\\n     " << index << " using 1:" << column
+                   << ":6 with labels left offset char 0.5,0.6 font \",9\" tc lt " << k + 1 << " notitle";
+            }
+            gp << "\n";
+        }
+        gp << "unset multiplot\nset output\n";
+    }
+    std::ofstream dataFile(dir / "track.dat");
+    dataFile << data.str();
+    std::ofstream scriptFile(dir / "track.gp");
+    scriptFile << gp.str();
+    if (!dataFile || !scriptFile) return "cannot write " + (dir / "track.gp").string();
+    return {};
+}
+
 std::string runGnuplot(const std::filesystem::path& dir, const std::string& script) {
     const pid_t pid = ::fork();
     if (pid < 0) return "cannot start gnuplot";

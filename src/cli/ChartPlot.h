@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "afb/sim/Chart.h"
+#include "afb/sim/TrackChart.h"
 
 namespace afb::cli {
 
@@ -14,6 +15,12 @@ namespace afb::cli {
 /// `dir`). `subtitle` goes under the title. Returns an error message, or an empty string.
 std::string writeChartPlot(const std::filesystem::path& dir, const std::vector<sim::ChartPoint>& points,
                            const sim::ChartOptions& options, const std::string& subtitle);
+
+/// Writes `dir`/track.dat and `dir`/track.gp (which renders track.png and track.svg): tracking error (mm and
+/// degrees) against cost, one line per figure and method through its strengths, each point labelled with its
+/// strength. Returns an error message, or an empty string.
+std::string writeTrackChartPlot(const std::filesystem::path& dir, const std::vector<sim::TrackChartPoint>& points,
+                                const std::string& subtitle);
 
 /// Runs `gnuplot SCRIPT` in `dir` (afb chart's front.gp, afb stress's stress.gp). Returns an error message
 /// (gnuplot missing, or its exit status), or an empty string.

@@ -14,6 +14,7 @@
 #include "afb/figure/Load.h"
 #include "afb/sim/Chart.h"
 #include "afb/sim/RawRagdoll.h"
+#include "afb/sim/TrackChart.h"
 
 namespace afb::cli {
 namespace {
@@ -112,7 +113,54 @@ void runChartInto(const ChartCli& opt, const std::vector<figure::Figure>& figure
     writeChartOutputs(opt, runs, names);
 }
 
+// afb chart --track: tracking runs of the rigid methods at each strength instead of drops, into --out.
+int trackChartCommand(ChartCli& opt) {
+    sim::TrackChartOptions track;
+    for (sim::ChartMethod& m : parseMethods(opt.methods)) {
+        if (sim::isRaw(m.method) || m.method.backend != bullet::Backend::Rigid)
+            std::printf("afb chart --track: %s left out (motors and keyframed bodies need the rigid backend)\n",
+                        m.label.c_str());
+        else track.methods.push_back(std::move(m));
+    }
+    if (track.methods.empty() || opt.strengths.empty() || opt.chart.hz.empty())
+        usageError("--track needs a rigid method in --methods, a --strengths and a --hz value");
+    track.strengths = opt.strengths;
+    track.hz = opt.chart.hz;
+    track.repeats = opt.chart.repeats;
+    track.track.seconds = opt.chart.seconds;
+    std::vector<figure::Figure> figures;
+    std::vector<std::string> names;
+    if (!loadChartFigures(opt, figures, names)) return kExitFailure;
+    text::Diagnostics diags;
+    std::filesystem::path anim = opt.trackAnim;
+    if (!anim.is_absolute() && !std::filesystem::exists(anim) && std::filesystem::exists(opt.base / anim))
+        anim = opt.base / anim;
+    const auto loadedAnim = decl::loadMd5Anim(anim, diags);
+    std::optional<std::vector<sim::TrackChartPoint>> points;
+    if (loadedAnim) points = sim::runTrackChart(figures, *loadedAnim, track, diags);
+    printDiagnostics(diags);
+    std::error_code ec;
+    std::filesystem::create_directories(opt.out, ec);
+    if (!points || ec) {
+        if (ec) std::cerr << "afb chart: cannot create " << opt.out.string() << ": " << ec.message() << "\n";
+        return kExitFailure;
+    }
+    const std::string summary = sim::trackChartMarkdown(*points, track);
+    std::ofstream(opt.out / "track.md") << summary;
+    const std::string subtitle = "Bullet " + sim::bulletVersion() + " " + sim::bulletPrecision() + ", " +
+                                 anim.filename().string() + ", " + CLI::detail::to_string(track.track.seconds) +
+                                 " s, root keyframed";
+    std::string plotError = writeTrackChartPlot(opt.out, *points, subtitle);
+    if (plotError.empty()) plotError = runGnuplot(opt.out, "track.gp");
+    std::printf("%s", summary.c_str());
+    if (!plotError.empty()) std::cerr << "afb chart: warning: no track.png/track.svg: " << plotError << "\n";
+    std::printf("\nwrote %s/{track.md,track.gp,track.dat%s}\n", opt.out.string().c_str(),
+                plotError.empty() ? ",track.png,track.svg" : "");
+    return 0;
+}
+
 int chartCommand(ChartCli& opt) {
+    if (!opt.trackAnim.empty()) return trackChartCommand(opt);
     resolveChartOptions(opt);
     std::vector<figure::Figure> figures;
     std::vector<std::string> names;
@@ -138,13 +186,21 @@ void addChartCommand(CLI::App& app, int& exitCode, char** argv) {
     cmd->footer("Writes into --out: runs.csv (one row per run: method_label, height_m, hz, repeat and every afb drop "
                 "field and knob), front.png and front.svg (gnuplot: cost against each error, log-log, Pareto fronts "
                 "dashed), front.gp and front.dat (their script and data), summary.md (per figure: every method, the "
-                "Pareto front, the cheapest method within the --max-* bounds).\n"
+                "Pareto front, the cheapest method within the --max-* bounds). With --track: track.md, track.png, "
+                "track.svg, track.gp and track.dat (tracking error against cost per method and strength) instead.\n"
                 "Methods: a preset or raw (plain Bullet), optionally with knob overrides: NAME[:KNOB=VALUE]..., e.g. "
                 "raw:substeps=4 or default:position-iterations=8 (afb methods lists the methods and knobs).\n"
                 "Cost: thread CPU time inside the steps per awake body-step (median of the repeats, min-max shown). "
                 "Instruction counts: docs/performance.md.");
     auto opt = std::make_shared<ChartCli>();
     addChartOptions(cmd, *opt);
+    cmd->add_option("--track", opt->trackAnim,
+                    "The tracking panel instead of drops: every rigid method follows this md5anim (root keyframed, "
+                    "as afb track) at each --strengths; writes track.md and track.png (tracking error against cost)");
+    cmd->add_option("--strengths", opt->strengths, "Motor strengths of --track, comma-separated")
+        ->delimiter(',')
+        ->check(nonNegative())
+        ->capture_default_str();
     cmd->callback([opt, &exitCode, argv] {
         if (!opt->precision.empty() && opt->precision != sim::bulletPrecision()) {
             execOtherPrecision(opt->precision, argv, "afb chart");

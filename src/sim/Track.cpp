@@ -16,6 +16,7 @@
 #include "afb/figure/Placement.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
+#include "afb/sim/Stress.h"
 
 namespace afb::sim {
 namespace {
@@ -157,9 +158,10 @@ void checkExplosion(const bullet::Ragdoll& doll, double now, TrackResult& r) {
     r.exploded = r.exploded || bad;
 }
 
-// Sets the motors, the keyframed bodies and the starting state: the animation at time 0.
-void prepare(bullet::Ragdoll& doll, const TrackOptions& o, const std::vector<figure::BodyState>& start,
-             TrackResult& r) {
+// Sets the motors, the keyframed bodies and the starting state: the animation at time 0. Returns the keyframed
+// bodies.
+std::vector<int> prepare(bullet::Ragdoll& doll, const TrackOptions& o, const std::vector<figure::BodyState>& start,
+                         TrackResult& r) {
     (void)doll.setBodyStates(start); // one state per body, finite: the animation's
     std::vector<int> keyframed = {0};
     if (o.root == TrackRoot::Free) keyframed = trackLegBodies(doll.figure());
@@ -169,6 +171,20 @@ void prepare(bullet::Ragdoll& doll, const TrackOptions& o, const std::vector<fig
     }
     (void)doll.setMotorGains(r.gains);
     (void)doll.driveToPose(start);
+    return keyframed;
+}
+
+// The largest angular speed of a body at the cut relative to its target, after a step (cutMaxRelRadS).
+void measureCut(const bullet::Ragdoll& doll, const std::vector<int>& cut, std::span<const figure::BodyState> target,
+                TrackResult& r) {
+    for (int b : cut) {
+        const auto i = static_cast<std::size_t>(b);
+        const double rel = (doll.bodyState(b).angularVelocity - target[i].angularVelocity).norm();
+        if (rel > r.cutMaxRelRadS) {
+            r.cutMaxRelRadS = rel;
+            r.cutBody = doll.figure().bodies[i].name;
+        }
+    }
 }
 
 // The hit, when this step is its step: along world +X at the body's centre of mass.
@@ -202,6 +218,22 @@ void measureRecovery(const std::vector<StepErrors>& steps, double dt, double war
 const char* toString(TrackRoot root) { return root == TrackRoot::Free ? "free" : "keyframed"; }
 
 bullet::MotorGains defaultTrackGains() { return bullet::MotorGains{15.0, 4.0}; }
+
+std::vector<int> trackCutBodies(const figure::Figure& f, const std::vector<int>& keyframed) {
+    std::vector<char> held(f.bodies.size(), 0), cut(f.bodies.size(), 0);
+    for (int b : keyframed)
+        if (b >= 0 && static_cast<std::size_t>(b) < held.size()) held[static_cast<std::size_t>(b)] = 1;
+    for (const figure::FigureConstraint& c : f.constraints) {
+        if (c.body1 < 0 || c.body2 < 0) continue; // a body joined to the world is no cut
+        const auto b1 = static_cast<std::size_t>(c.body1), b2 = static_cast<std::size_t>(c.body2);
+        if (held[b1] && !held[b2]) cut[b2] = 1;
+        if (held[b2] && !held[b1]) cut[b1] = 1;
+    }
+    std::vector<int> bodies;
+    for (std::size_t b = 0; b < cut.size(); ++b)
+        if (cut[b]) bodies.push_back(static_cast<int>(b));
+    return bodies;
+}
 
 std::vector<int> trackLegBodies(const figure::Figure& f) {
     const auto n = f.bodies.size();
@@ -245,6 +277,7 @@ struct TrackLoop {
     Scene& scene;
     bullet::Ragdoll& doll;
     const DropObserver& observer;
+    const std::vector<int>& cut; ///< the simulated bodies joined to keyframed ones
     TrackResult& r;
 
     bool run(text::Diagnostics& diags) {
@@ -255,6 +288,8 @@ struct TrackLoop {
         std::vector<StepErrors> perStep;
         double sumM2 = 0, sumDeg2 = 0, cpu = 0, awakeCpu = 0, wall = 0;
         long long samples = 0;
+        const double gravity = doll.figure().units.gravityMps2;
+        const double energy0 = figureEnergyJ(doll.figure(), doll.bodyStates(), gravity);
         if (observer) observer(0, doll.bodyTransforms());
         for (int k = 0; k < steps; ++k) {
             const double t1 = (k + 1) * dt;
@@ -278,12 +313,15 @@ struct TrackLoop {
             ++r.steps;
             if (observer) observer(k + 1, doll.bodyTransforms());
             checkExplosion(doll, t1, r);
+            r.maxEnergyGainJ =
+                std::max(r.maxEnergyGainJ, figureEnergyJ(doll.figure(), doll.bodyStates(), gravity) - energy0);
             const std::vector<Transform> bodies = doll.bodyTransforms();
             const std::vector<Transform> sim = simulatedJoints(doll.figure(), bodies, *joints);
             double m2 = 0, deg2 = 0;
             const StepErrors e = jointErrors(sim, *joints, m2, deg2); // the entity is the identity: model = world
             perStep.push_back(e);
             if (t1 < o.warmupSeconds - 1e-9) continue;
+            measureCut(doll, cut, *target, r);
             sumM2 += m2;
             sumDeg2 += deg2;
             samples += static_cast<long long>(sim.size());
@@ -337,8 +375,8 @@ std::optional<TrackResult> runTrack(const figure::Figure& figure, const decl::Md
     bullet::SpawnOptions spawn;
     spawn.comeToRest = false; // a powered figure following an animation never rests
     bullet::Ragdoll& doll = scene.spawn(bullet::RagdollAsset::create(figure), spawn);
-    prepare(doll, o, *start, r);
-    TrackLoop loop{o, looped, scene, doll, observer, r};
+    const std::vector<int> cut = trackCutBodies(figure, prepare(doll, o, *start, r));
+    TrackLoop loop{o, looped, scene, doll, observer, cut, r};
     if (!loop.run(diags)) return std::nullopt;
     r.wallMs = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count() * 1e3;
     return r;

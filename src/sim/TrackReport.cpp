@@ -47,6 +47,12 @@ const std::vector<TrackField>& trackFields() {
          "largest excess of the animation's own pose over the figure's joint limits: a floor under the errors",
          [](const R& r) { return json(r.animLimitExcessDeg); }},
         {"anim_limit_joint", "the constraint where it happened", [](const R& r) { return json(r.animLimitJoint); }},
+        {"cut_max_rel_rad_s",
+         "largest angular speed of a simulated body joined to a keyframed one relative to its target, after the "
+         "warm-up",
+         [](const R& r) { return json(r.cutMaxRelRadS); }},
+        {"cut_body", "the body where it happened (empty when no body lies at the cut)",
+         [](const R& r) { return json(r.cutBody); }},
         {"hit_body", "the body --hit struck (empty without one)", [](const R& r) { return json(r.hitBody); }},
         {"hit_at_s", "when it struck", [](const R& r) { return jsonOrNull(r.hitAtS); }},
         {"pre_hit_max_m", "largest joint distance between the warm-up and the hit (0 without a hit)",
@@ -60,6 +66,10 @@ const std::vector<TrackField>& trackFields() {
         {"max_speed_mps", "fastest body", [](const R& r) { return json(r.maxSpeedMps); }},
         {"max_anchor_error_m", "largest separation of a constraint's two anchor copies",
          [](const R& r) { return json(r.maxAnchorErrorM); }},
+        {"max_energy_gain_j",
+         "largest kinetic + potential energy above the start; holding a still pose it must stay 0 (the motors "
+         "start relaxed), on a moving animation it counts the animation's work",
+         [](const R& r) { return json(r.maxEnergyGainJ); }},
         {"exploded", "NaN, a speed over 100 m/s or an anchor error over 0.1 m",
          [](const R& r) { return json(r.exploded); }},
         {"exploded_at_s", "when it first exploded", [](const R& r) { return jsonOrNull(r.explodedAtS); }},

@@ -1,13 +1,11 @@
 // afb_gen_content: generates the project's own bundled content (no id Software data is used or copied).
 //
-// What it writes into OUTDIR (same layout as the repository root):
-//   models/md5/humanoid/humanoid.md5mesh, af_pose.md5anim, walk.md5anim  a rigged, skinned humanoid (~71
-//   units) af/humanoid.af                                                        its 15-body ragdoll
-//   models/md5/props/props.md5mesh, props_af_pose.md5anim + af/props.af  one body per shape type, joined by
-//   springs models/md5/props/lamp/*  + af/lamp.af                                a lamp shade hanging on a
-//   short chain models/md5/props/buggy/* + af/buggy.af                               a chassis with four
-//   sprung wheels def/humanoid.def, def/props.def                                      model decls and
-//   entityDefs
+// What it writes into OUTDIR (same layout as the repository root): models/md5/humanoid/ (humanoid.md5mesh,
+// af_pose.md5anim, walk.md5anim, idle.md5anim: a rigged, skinned humanoid of about 71 units with a walk cycle and an
+// idle) and af/humanoid.af, its 15-body ragdoll; models/md5/props/props.md5mesh, props_af_pose.md5anim and
+// af/props.af, one body per shape type joined by springs; models/md5/props/lamp/ and af/lamp.af, a lamp shade
+// hanging on a short chain; models/md5/props/buggy/ and af/buggy.af, a chassis with four sprung wheels;
+// def/humanoid.def and def/props.def, the model decls and entityDefs.
 //
 // One file per figure in content/ (Humanoid, Props, Lamp, Buggy), on shared rig and .af helpers (content/Rig,
 // content/AfBuilder); this file holds the .def texts and main.
@@ -51,6 +49,7 @@ model model_humanoid {
 	mesh							models/md5/humanoid/humanoid.md5mesh
 	anim af_pose					models/md5/humanoid/af_pose.md5anim
 	anim walk						models/md5/humanoid/walk.md5anim
+	anim idle						models/md5/humanoid/idle.md5anim
 }
 
 // An actor whose ragdoll is af/humanoid.af.

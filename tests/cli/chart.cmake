@@ -1,6 +1,7 @@
 # cmake -P helper for cli.chart_matrix: a small `afb chart` (2 methods × 1 figure × 1 height, a short drop) and
 # its files: runs.csv with every documented column and one row per run, front.png and front.svg valid (checked
-# by afb_picture_check; skipped when gnuplot is absent), summary.md naming a front.
+# by afb_picture_check; skipped when gnuplot is absent), summary.md naming a front. Then the tracking panel
+# (--track): raw left out, one track.md row per method and strength, track.png and track.svg valid.
 # Arguments: AFB, CHECK (afb_picture_check), SRC (repository root), TMP (scratch folder), GNUPLOT (its path, or
 # empty/NOTFOUND).
 cmake_policy(SET CMP0007 NEW) # empty CSV cells are list elements
@@ -57,6 +58,20 @@ foreach(needle "## chain" "Pareto front" "`raw`" "`fast:position-iterations=1`" 
   endif()
 endforeach()
 
+# The tracking panel: the humanoid's walk at two strengths with the one rigid method listed.
+run(0 ${AFB} chart --base ${SRC} humanoid --track models/md5/humanoid/walk.md5anim --methods raw,fast --strengths 0.5,2
+    --hz 60 --repeats 1 --seconds 1 --out ${TMP}/track)
+if(NOT run_output MATCHES "raw left out")
+  message(FATAL_ERROR "afb chart --track did not say it left raw out:\n${run_output}")
+endif()
+file(READ ${TMP}/track/track.md track)
+foreach(needle "## humanoid" "| fast | 0.50 |" "| fast | 2.00 |")
+  string(FIND "${track}" "${needle}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "track.md lacks '${needle}':\n${track}")
+  endif()
+endforeach()
+
 # The pictures, when gnuplot is there to draw them.
 if(NOT GNUPLOT)
   message(STATUS "gnuplot not found: front.png/front.svg not checked (cmake/install-deps.sh installs it)")
@@ -67,3 +82,5 @@ if(NOT GNUPLOT)
 endif()
 run(0 ${CHECK} png ${TMP}/front.png)
 run(0 ${CHECK} svg ${TMP}/front.svg)
+run(0 ${CHECK} png ${TMP}/track/track.png)
+run(0 ${CHECK} svg ${TMP}/track/track.svg)

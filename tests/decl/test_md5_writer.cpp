@@ -244,11 +244,11 @@ TEST_CASE("md5 writers: the generated bundled files are the writers' canonical t
     // afb_gen_content writes its md5 files with these writers, so writing what they hold reproduces them.
     // (The chain is authored by hand and only has to read back equal, above.)
     const char* const generated[] = {
-        "models/md5/humanoid/humanoid.md5mesh",   "models/md5/humanoid/af_pose.md5anim",
-        "models/md5/humanoid/walk.md5anim",       "models/md5/props/props.md5mesh",
-        "models/md5/props/props_af_pose.md5anim", "models/md5/props/lamp/lamp.md5mesh",
-        "models/md5/props/lamp/af_pose.md5anim",  "models/md5/props/buggy/buggy.md5mesh",
-        "models/md5/props/buggy/af_pose.md5anim",
+        "models/md5/humanoid/humanoid.md5mesh", "models/md5/humanoid/af_pose.md5anim",
+        "models/md5/humanoid/walk.md5anim",     "models/md5/humanoid/idle.md5anim",
+        "models/md5/props/props.md5mesh",       "models/md5/props/props_af_pose.md5anim",
+        "models/md5/props/lamp/lamp.md5mesh",   "models/md5/props/lamp/af_pose.md5anim",
+        "models/md5/props/buggy/buggy.md5mesh", "models/md5/props/buggy/af_pose.md5anim",
     };
     for (const char* rel : generated) {
         INFO(rel);

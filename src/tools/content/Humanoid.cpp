@@ -1,5 +1,5 @@
-// The humanoid: a 30-joint skeleton, a skinned body and head made of tubes, its 15-body ragdoll and a walk
-// cycle.
+// The humanoid: a 30-joint skeleton, a skinned body and head made of tubes, its 15-body ragdoll, a walk cycle and an
+// idle (breathing and a slow sway over the feet).
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -251,6 +251,62 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
     return writeMd5Anim(toMd5Anim(sk, meshes, frames, animated, 24, "afb_gen_content: humanoid walk cycle"));
 }
 
+// The idle: 4 s (96 distinct frames plus the first again, at 24 fps) of standing. The whole figure sways over its
+// feet, turning about the model origin on the ground between them (the root joint's rotation: its translation is
+// dropped by the loader), once sideways and twice back and forth per cycle; the feet turn back to stay flat and the
+// spine leans a little against the sway. It breathes twice per cycle: the spine and the head nod, the arms hanging
+// from the shoulders lift and the elbows bend a little with it. Every term is a whole number of periods of the cycle,
+// so the last frame is the first again, and every joint stays well inside the .af's limits.
+std::string humanoidIdle(const Skeleton& sk, const std::vector<Mesh>& meshes) {
+    const int cycle = 96, numFrames = cycle + 1;
+    std::vector<int> animated(sk.joints.size(), 0);
+    const int QALL = 8 | 16 | 32; // a product of turns about X and Y has a Z component too
+    auto at = [&](const std::string& joint) { return static_cast<std::size_t>(sk.index(joint)); };
+    animated[at("origin")] = QALL;
+    animated[at("spine")] = QALL;
+    animated[at("neck")] = QALL;
+    for (const char* side : {"l", "r"}) {
+        const std::string p = side;
+        animated[at(p + "_upperarm")] = QALL;
+        animated[at(p + "_forearm")] = QALL;
+        animated[at(p + "_thigh")] = QALL;
+        animated[at(p + "_shin")] = QALL;
+        animated[at(p + "_foot")] = QALL;
+    }
+    auto aa = [](double deg, const Vector3d& axis) { return Quaterniond(Eigen::AngleAxisd(deg * kDeg, axis)); };
+    std::vector<Pose> frames;
+    for (int f = 0; f < numFrames; ++f) {
+        const double phase = 2 * kPi * (f % cycle) / cycle;
+        const double breath = std::sin(2 * phase); // > 0: breathing in
+        const double sway = std::sin(phase);       // > 0: the weight over the left foot (+Y)
+        Pose pose = bindPose(sk);
+        // About +X a positive angle tips the top towards −Y (right); about +Y it tips it towards +X (forward).
+        const Quaterniond root =
+            aa(-2.0 * sway, Vector3d::UnitX()) * aa(-0.8 * std::sin(2 * phase + 1), Vector3d::UnitY());
+        pose.q[at("origin")] = root;
+        pose.q[at("spine")] = aa(0.8 * sway, Vector3d::UnitX()) * aa(1.5 * breath, Vector3d::UnitY());
+        pose.q[at("neck")] = aa(-1.2 * breath, Vector3d::UnitY()) * aa(4 * std::sin(phase + 0.5), Vector3d::UnitZ());
+        for (const char* side : {"l", "r"}) {
+            const std::string p = side;
+            const double sy = p == "l" ? 1 : -1;
+            // The leg the weight leaves bends its knee a little; the foot turns back flat on the ground.
+            const double knee = 4 + 3 * (1 - sy * sway);
+            const Quaterniond thigh = aa(-0.5 * knee, Vector3d::UnitY()) * aa(0.5 * sy, Vector3d::UnitX());
+            const Quaterniond shin = aa(knee, Vector3d::UnitY());
+            pose.q[at(p + "_thigh")] = thigh;
+            pose.q[at(p + "_shin")] = shin;
+            pose.q[at(p + "_foot")] = (root * thigh * shin).inverse();
+            const Quaterniond lower = aa(-sy * (38 - 2 * breath), Vector3d::UnitX());
+            pose.q[at(p + "_upperarm")] = aa(-3 * breath - 4, Vector3d::UnitY()) * lower;
+            const double s45 = std::sin(45 * kDeg);
+            pose.q[at(p + "_forearm")] = aa(12 + 3 * breath, Vector3d(0, -s45, -sy * s45));
+        }
+        frames.push_back(pose);
+    }
+    return writeMd5Anim(
+        toMd5Anim(sk, meshes, frames, animated, 24, "afb_gen_content: humanoid idle (breathing, sway)"));
+}
+
 } // namespace
 
 void writeHumanoid(Output& out) {
@@ -262,6 +318,7 @@ void writeHumanoid(Output& out) {
               writeMd5Anim(
                   afPoseAnim(sk, meshes, "afb_gen_content: humanoid af_pose (arms 45 degrees down, legs apart)")));
     out.write("models/md5/humanoid/walk.md5anim", humanoidWalk(sk, meshes));
+    out.write("models/md5/humanoid/idle.md5anim", humanoidIdle(sk, meshes));
     out.write("af/humanoid.af", humanoidAf(sk));
 }
 

@@ -76,6 +76,18 @@ struct TrackResult {
     /// and its constraint: a floor under the tracking errors, since the limits hold and no motor pulls past them.
     double animLimitExcessDeg = 0;
     std::string animLimitJoint;
+    /// The largest kinetic + potential energy of the figure's bodies above its start, J (gravity along −Z; the
+    /// keyframed bodies included). The motors are springs and dampers that start relaxed on the animation's first
+    /// frame: holding a still pose (a one-frame animation) with still keyframed bodies, they and the joints can only
+    /// take energy out, so a gain there is the solver's. On a moving animation the keyframed bodies and the motors
+    /// do work on the figure: there it measures the animation too.
+    double maxEnergyGainJ = 0;
+    /// The cut between keyframed and simulated bodies: over the simulated bodies joined by a constraint to a
+    /// keyframed one (the humanoid's torso and thighs under a keyframed pelvis, its pelvis above keyframed legs) and
+    /// the steps from warmupSeconds on, the largest norm of a body's angular velocity minus its target's (the
+    /// animation's), rad/s, and that body (empty when no body lies at the cut).
+    double cutMaxRelRadS = 0;
+    std::string cutBody;
     bool exploded = false; ///< NaN, a speed over kExplodeSpeedMps or an anchor error over kExplodeAnchorM
     std::optional<double> explodedAtS;
     double maxSpeedMps = 0, maxAnchorErrorM = 0;
@@ -90,6 +102,10 @@ struct TrackResult {
     long long awakeBodySteps = 0;
     double stepCpuMs = 0, awakeStepCpuMs = 0, cpuUsPerAwakeBodyStep = 0; ///< as DropResult's
 };
+
+/// The simulated bodies joined by a constraint to a body of `keyframed` (body indices): the bodies at the cut of a
+/// partial ragdoll, where a simulated part hangs from a keyframed one. Ascending.
+std::vector<int> trackCutBodies(const figure::Figure& figure, const std::vector<int>& keyframed);
 
 /// Runs `figure` following `anim` (looped: its cycle is numFrames − 1 frames, the last frame being the first
 /// again, as the engine loops an anim) for options.seconds. Each step the motors are driven toward the pose and
