@@ -25,7 +25,9 @@ class JointMotorConstraint : public btTypedConstraint {
     enum class Axes {
         Rotation,       ///< the whole relative rotation (three rows about the world axes)
         RotationAboutZ, ///< the rotation about frame B's Z (hinges: one row)
-        SlideAlongX,    ///< the offset of frame B's origin from frame A's along frame B's X (sliders: one row)
+        Swing, ///< the rotation about the two axes across the bisector of the frames' X axes (universal joints, which
+               ///< lock the twist about it: two rows)
+        SlideAlongX, ///< the offset of frame B's origin from frame A's along frame B's X (sliders: one row)
     };
     /// Frames as the joint's: fixed in A and in B (b's is in the world when b is Bullet's fixed body).
     JointMotorConstraint(btRigidBody& a, btRigidBody& b, const btTransform& frameInA, const btTransform& frameInB,
@@ -36,6 +38,12 @@ class JointMotorConstraint : public btTypedConstraint {
     btScalar getParam(int, int) const override { return 0; }
 
     void setGains(const MotorGains& gains) { m_gains = gains; }
+    /// The inverse inertia the joint carries (CarriedInertia), world axes, 1/(kg·m²): each angular row's spring
+    /// and damper are then set on it instead of on the two bodies' own inertia. Null: the two bodies' own.
+    void setCarriedInverseInertia(const btMatrix3x3* w) {
+        m_hasCarried = w != nullptr;
+        if (w) m_carried = *w;
+    }
     /// Whether the gains give the motor any rows (a frequency above 0).
     bool active() const { return rowCount() > 0; }
     const MotorGains& gains() const { return m_gains; }
@@ -51,7 +59,11 @@ class JointMotorConstraint : public btTypedConstraint {
     void rotationRows(btConstraintInfo2* info, btScalar rate, btScalar bias, btScalar bound) const;
     void slideRow(btConstraintInfo2* info, btScalar rate, btScalar bias, btScalar bound) const;
 
+    btScalar rowCfm(btScalar cfm, const btVector3& axis) const;
+
     btTransform m_frameInA, m_frameInB;
+    btMatrix3x3 m_carried;
+    bool m_hasCarried = false;
     Axes m_axes;
     MotorGains m_gains;
     btQuaternion m_target = btQuaternion::getIdentity();
