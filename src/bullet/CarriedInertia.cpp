@@ -64,6 +64,7 @@ Eigen::Matrix3d CarriedInertia::Sum::about(const Eigen::Vector3d& x) const {
 void CarriedInertia::reset(int rigids, std::span<const Joint> joints) {
     const auto n = static_cast<std::size_t>(rigids > 0 ? rigids : 0);
     m_parent.assign(n, -1);
+    m_root.assign(n, 0);
     m_worldJoints.assign(n, 0);
     m_child.assign(joints.size(), -1);
     m_subtree.assign(n, Sum{});
@@ -88,6 +89,7 @@ void CarriedInertia::reset(int rigids, std::span<const Joint> joints) {
         m_order.push_back(static_cast<int>(root));
         for (std::size_t k = first; k < m_order.size(); ++k) {
             const int r = m_order[k];
+            m_root[static_cast<std::size_t>(r)] = static_cast<int>(root);
             for (const auto& [other, joint] : next[static_cast<std::size_t>(r)]) {
                 if (seen[static_cast<std::size_t>(other)]) continue;
                 seen[static_cast<std::size_t>(other)] = 1;
@@ -134,11 +136,9 @@ void CarriedInertia::update(std::span<btRigidBody* const> bodies) {
         s.second = rotation * principal.asDiagonal() * rotation.transpose() + mass * pointInertia(x);
     }
     // Children before parents: the breadth-first order backwards.
-    m_total = Sum{};
     for (auto it = m_order.rbegin(); it != m_order.rend(); ++it) {
         const auto r = static_cast<std::size_t>(*it);
         if (m_parent[r] >= 0) m_subtree[static_cast<std::size_t>(m_parent[r])] += m_subtree[r];
-        else m_total += m_subtree[r];
     }
 }
 
@@ -147,11 +147,12 @@ bool CarriedInertia::inverseInertia(int j, const btVector3& pivot, btMatrix3x3& 
     const Joint& jt = m_joints[static_cast<std::size_t>(j)];
     Sum far, near;
     if (m_child[static_cast<std::size_t>(j)] >= 0) {
-        far = m_subtree[static_cast<std::size_t>(m_child[static_cast<std::size_t>(j)])];
-        near = m_total - far;
+        const auto child = static_cast<std::size_t>(m_child[static_cast<std::size_t>(j)]);
+        far = m_subtree[child];
+        near = m_subtree[static_cast<std::size_t>(m_root[child])] - far; // the rest of its part of the figure
     } else if (jt.b < 0 && jt.a >= 0 && static_cast<std::size_t>(jt.a) < m_parent.size()) {
         // Held by the world: the figure's part that turns about it is all of it (the world side is held).
-        far = m_total;
+        far = m_subtree[static_cast<std::size_t>(m_root[static_cast<std::size_t>(jt.a)])];
         near.held = 1;
     } else return false;
     const Eigen::Vector3d x = toEigen(pivot) - m_reference;

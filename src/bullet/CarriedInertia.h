@@ -23,7 +23,8 @@ class CarriedInertia {
     struct Joint {
         int a = -1, b = -1;
     };
-    /// Lays out the tree over `rigids` bodies from rigid 0 (every joint a connection, motor or not).
+    /// Lays out the tree over `rigids` bodies from rigid 0 (every joint a connection, motor or not; a figure in
+    /// several parts is a forest, each part rooted at its first rigid).
     void reset(int rigids, std::span<const Joint> joints);
     /// W of joint `j` about world point `pivot` with the bodies as they are now, 1/(kg·m²), world axes; false
     /// (and `w` unset) when the joint has none. update() must have run since the bodies last moved.
@@ -46,10 +47,10 @@ class CarriedInertia {
     std::vector<Joint> m_joints;    ///< as reset() took them
     std::vector<int> m_order;       ///< rigids in breadth-first order from rigid 0
     std::vector<int> m_parent;      ///< per rigid, its parent in the tree (−1: a root)
+    std::vector<int> m_root;        ///< per rigid, the root of its part of the figure (its connected bodies)
     std::vector<int> m_child;       ///< per joint, the rigid whose subtree is its far side (−1: none)
     std::vector<int> m_worldJoints; ///< per rigid, how many joints hold it to the world
     std::vector<Sum> m_subtree;     ///< per rigid, its own body and everything below it in the tree
-    Sum m_total;
     Eigen::Vector3d m_reference = Eigen::Vector3d::Zero();
 };
 
