@@ -11,14 +11,15 @@ namespace afb::bullet {
 inline constexpr double kMaxFrequencyPerStepRate = 0.25;
 
 /// Up to three angular rows (or one linear row) between two rigid bodies, each a soft constraint toward the
-/// target: with the row's effective mass m, natural frequency ω = 2π·f and damping ratio ζ, the impulse λ of a
-/// step h satisfies J·v + λ·cfm/m = (ω·e + 2ζ·v*)/(h·ω + 2ζ) with cfm = 1/(h·(h·ω² + 2ζ·ω)), where e is the error
-/// to the target and v* the target velocity: the spring k = m·ω² and damper c = 2m·ζ·ω evaluated at the end of the
-/// step. The frequency is held to a quarter of the step rate (kMaxFrequencyPerStepRate): above it the rows correct
-/// nearly the whole error in one step, and a figure's coupled rows, solved by iterations with its contacts, then
-/// gain energy (a humanoid held at 400 Hz by motors on a 15 Hz step does). Bullet's own row update is unstable
-/// once cfm exceeds 1 (a soft motor at a fast step); RagdollSolver rescales the rows of a constraint tracked as
-/// soft so its update is exact (RagdollSolver::track), so the motor must be solved by a RagdollSolver.
+/// target: with the row's mass m (the inertia the joint carries about the row's axis when the ragdoll set it,
+/// setCarriedInverseInertia, else the row's effective mass over the two bodies), natural frequency ω = 2π·f and
+/// damping ratio ζ, the impulse λ of a step h satisfies J·v + λ·cfm/m = (ω·e + 2ζ·v*)/(h·ω + 2ζ) with cfm = 1/(h·(h·ω²
+/// + 2ζ·ω)), where e is the error to the target and v* the target velocity: the spring k = m·ω² and damper c = 2m·ζ·ω
+/// evaluated at the end of the step. The frequency is held to a quarter of the step rate (kMaxFrequencyPerStepRate):
+/// above it the rows correct nearly the whole error in one step, and a figure's coupled rows, solved by iterations with
+/// its contacts, then gain energy (a humanoid held at 400 Hz by motors on a 15 Hz step does). Bullet's own row update
+/// is unstable once cfm exceeds 1 (a soft motor at a fast step); RagdollSolver rescales the rows of a constraint
+/// tracked as soft so its update is exact (RagdollSolver::track), so the motor must be solved by a RagdollSolver.
 class JointMotorConstraint : public btTypedConstraint {
   public:
     /// What the motor drives.
