@@ -6,6 +6,7 @@
 #   cmake/callgrind-cost.sh humanoid raw legacy default -- --count 4 --steps 300 --no-sleep
 # AFB defaults to build/release/bin/afb; methods are afb chart's specs (NAME[:KNOB=VALUE]...).
 # AFB_BASE=DIR takes the entity from another content folder (default: the repository root).
+# AFB_COMMAND=track runs afb track instead of afb drop (its options after --, e.g. --anim FILE --strength 0).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 afb=build/release/bin/afb
@@ -23,7 +24,7 @@ for spec in "${methods[@]}"; do
   args=(--method "${parts[0]}")
   for kv in "${parts[@]:1}"; do args+=("--${kv%%=*}" "${kv#*=}"); done
   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='btDiscreteDynamicsWorld::stepSimulation*' \
-    --callgrind-out-file="$work/cg.out" "$afb" drop --base "${AFB_BASE:-.}" "$entity" "${args[@]}" --csv "$work/run.csv" "$@" \
+    --callgrind-out-file="$work/cg.out" "$afb" "${AFB_COMMAND:-drop}" --base "${AFB_BASE:-.}" "$entity" "${args[@]}" --csv "$work/run.csv" "$@" \
     >/dev/null 2>"$work/valgrind.log" || true # afb drop exits 1 when a figure explodes: still counted
   [ -s "$work/run.csv" ] || { cat "$work/valgrind.log" >&2; exit 1; }
   ir=$(sed -n 's/^summary: *\([0-9]*\).*/\1/p' "$work/cg.out")

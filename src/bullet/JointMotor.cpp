@@ -57,7 +57,13 @@ void JointMotorConstraint::setSlideTarget(btScalar offsetM, btScalar speedMps) {
 
 int JointMotorConstraint::rowCount() const {
     if (!(m_gains.frequencyHz > 0) || !(m_gains.dampingRatio >= 0)) return 0;
-    return m_axes == Axes::Rotation ? 3 : 1;
+    switch (m_axes) {
+    case Axes::Rotation: return 3;
+    case Axes::Swing: return 2;
+    case Axes::RotationAboutZ:
+    case Axes::SlideAlongX: return 1;
+    }
+    return 1;
 }
 
 void JointMotorConstraint::getInfo1(btConstraintInfo1* info) {
@@ -94,14 +100,39 @@ void JointMotorConstraint::rotationRows(btConstraintInfo2* info, btScalar rate, 
     if (m_axes == Axes::RotationAboutZ) {
         const btVector3 z = fb.getColumn(2);
         w.angular(0, z);
-        w.soft(0, rate * error.dot(z) + bias * velocity.dot(z), cfm, bound);
+        w.soft(0, rate * error.dot(z) + bias * velocity.dot(z), rowCfm(cfm, z), bound);
+        return;
+    }
+    if (m_axes == Axes::Swing) {
+        // Across the bisector of the shafts, as the joint's twist row lies along it (UniversalConstraint): the
+        // twist is the joint's to hold, and a third row would only pull against it.
+        btVector3 bisector = fa.getColumn(0) + fb.getColumn(0);
+        if (bisector.length2() < btScalar(1e-6)) bisector = fb.getColumn(0);
+        bisector.normalize();
+        btVector3 across[2];
+        btPlaneSpace1(bisector, across[0], across[1]);
+        for (int i = 0; i < 2; ++i) {
+            w.angular(i, across[i]);
+            w.soft(i, rate * error.dot(across[i]) + bias * velocity.dot(across[i]), rowCfm(cfm, across[i]), bound);
+        }
         return;
     }
     for (int i = 0; i < 3; ++i) {
         const btVector3 axis(i == 0, i == 1, i == 2);
         w.angular(i, axis);
-        w.soft(i, rate * error[i] + bias * velocity[i], cfm, bound);
+        w.soft(i, rate * error[i] + bias * velocity[i], rowCfm(cfm, axis), bound);
     }
+}
+
+// Bullet takes a row's cfm per unit of its effective mass m = 1/(n·(I_A⁻¹ + I_B⁻¹)·n): the spring is m·ω². With
+// the carried inverse inertia W the spring is ω²/(n·W·n), so the cfm is scaled by (n·W·n)/(n·(I_A⁻¹ + I_B⁻¹)·n).
+btScalar JointMotorConstraint::rowCfm(btScalar cfm, const btVector3& axis) const {
+    if (!m_hasCarried) return cfm;
+    const btScalar own =
+        axis.dot(m_rbA.getInvInertiaTensorWorld() * axis) + axis.dot(m_rbB.getInvInertiaTensorWorld() * axis);
+    const btScalar carried = axis.dot(m_carried * axis);
+    if (!(own > 0) || !(carried > 0) || !std::isfinite(double(carried))) return cfm;
+    return cfm * (carried / own);
 }
 
 void JointMotorConstraint::slideRow(btConstraintInfo2* info, btScalar rate, btScalar bias, btScalar bound) const {

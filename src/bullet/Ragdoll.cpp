@@ -8,6 +8,7 @@
 
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
+#include "CarriedInertia.h"
 #include "EngineFriction.h"
 #include "JointMotor.h"
 #include "Multibody.h"

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <optional>
 
+#include "CarriedInertia.h"
 #include "JointMotor.h"
 #include "ObjectArena.h"
 #include "RagdollWorldLink.h"
@@ -19,8 +20,8 @@ using Axes = JointMotorConstraint::Axes;
 // What a joint type's motor drives: its free axes (none for a fixed joint or a spring).
 std::optional<Axes> motorAxes(figure::JointType type) {
     switch (type) {
-    case figure::JointType::BallAndSocket:
-    case figure::JointType::Universal: return Axes::Rotation;
+    case figure::JointType::BallAndSocket: return Axes::Rotation;
+    case figure::JointType::Universal: return Axes::Swing;
     case figure::JointType::Hinge: return Axes::RotationAboutZ;
     case figure::JointType::Slider: return Axes::SlideAlongX;
     case figure::JointType::Fixed:
@@ -216,6 +217,34 @@ void Ragdoll::addMotors() {
         if (!m_frozen && motor->active()) m_world.addConstraint(motor);
         m_constraints.push_back(motor);
         m_roles.push_back(RowRole::Motor);
+    }
+    // The tree of the rigids, every joint between two of them a connection.
+    std::vector<detail::CarriedInertia::Joint> joints(constraints.size());
+    for (std::size_t ci = 0; ci < constraints.size(); ++ci) {
+        const figure::FigureConstraint& c = constraints[ci];
+        if (m_layout->internal[ci] || c.body1 < 0) continue;
+        joints[ci].a = m_layout->rigidOf[static_cast<std::size_t>(c.body1)];
+        joints[ci].b = c.body2 >= 0 ? m_layout->rigidOf[static_cast<std::size_t>(c.body2)] : -1;
+    }
+    if (!m_carried) m_carried = std::make_unique<detail::CarriedInertia>();
+    m_carried->reset(static_cast<int>(m_bodies.size()), joints);
+    beginMotorStep();
+}
+
+// Each motor's spring and damper on the inertia its joint carries in the pose the step starts from.
+void Ragdoll::beginMotorStep() {
+    if (!m_carried || m_frozen ||
+        std::none_of(m_motors.begin(), m_motors.end(), [](const JointMotorConstraint* m) { return m && m->active(); }))
+        return;
+    m_carried->update(m_bodies);
+    btMatrix3x3 w;
+    for (std::size_t ci = 0; ci < m_motors.size(); ++ci) {
+        JointMotorConstraint* motor = m_motors[ci];
+        if (!motor || !motor->active()) continue;
+        const btVector3 pivot =
+            body(figure().constraints[ci].body1).getCenterOfMassTransform() * m_rigidFrames[ci].first.getOrigin();
+        const bool carried = m_carried->inverseInertia(static_cast<int>(ci), pivot, w);
+        motor->setCarriedInverseInertia(carried ? &w : nullptr);
     }
 }
 

@@ -472,6 +472,7 @@ void RagdollWorld::step(double dtSeconds) {
     for (Ragdoll* r : m_ragdolls) {
         r->checkGuard(); // what the game wrote since the last step
         detail::RagdollWorldLink::beginKeyframeStep(*r, dtSeconds);
+        detail::RagdollWorldLink::beginMotorStep(*r);
     }
     const int substeps = substepsFor(dtSeconds);
     m_lastSubsteps = substeps;

@@ -38,6 +38,8 @@ class RagdollWorldLink {
     static const btCollisionObject* sunkBox(const Ragdoll& ragdoll) { return ragdoll.m_restProxy.get(); }
     /// A step of `seconds` begins: the keyframed bodies take the velocity that reaches their targets by its end.
     static void beginKeyframeStep(Ragdoll& ragdoll, double seconds) { ragdoll.beginKeyframeStep(seconds); }
+    /// A step begins: the motors take the inertia each joint carries in the pose the step starts from.
+    static void beginMotorStep(Ragdoll& ragdoll) { ragdoll.beginMotorStep(); }
     /// A substep of `dt` integrated the simulated bodies: the keyframed ones move too.
     static void advanceKeyframes(Ragdoll& ragdoll, btScalar dt) { ragdoll.advanceKeyframes(dt); }
 };

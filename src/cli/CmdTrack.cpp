@@ -172,6 +172,11 @@ void printTrackTable(const TrackCli& opt, const sim::TrackResult& r) {
                      "  the animation itself passes the figure's limits by up to %.1f deg (at %s): no motor follows "
                      "it there\n",
                      r.animLimitExcessDeg, r.animLimitJoint.c_str());
+    if (r.animLockedExcessDeg > 0.5)
+        std::fprintf(out,
+                     "  the animation itself turns a joint about an axis it locks by up to %.1f deg (at %s): no "
+                     "motor follows it there\n",
+                     r.animLockedExcessDeg, r.animLockedJoint.c_str());
     if (r.hitAtS)
         std::fprintf(out, "  hit: %s at %.3f s; before it the errors stayed within %.4f m and %.2f deg\n",
                      r.hitBody.c_str(), *r.hitAtS, r.preHitMaxM, r.preHitMaxDeg);

@@ -14,6 +14,7 @@
 #include "afb/bullet/Convert.h"
 #include "afb/figure/Limits.h"
 #include "afb/figure/Placement.h"
+#include "afb/figure/Vocabulary.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
 #include "afb/sim/Stress.h"
@@ -134,6 +135,38 @@ void animationLimitExcess(const figure::Figure& f, std::span<const figure::BodyS
         if (deg > r.animLimitExcessDeg) {
             r.animLimitExcessDeg = deg;
             r.animLimitJoint = c.name;
+        }
+    }
+}
+
+// How far the animation's own pose turns a joint about an axis its type locks, against the load pose (where the
+// joint's two frames coincide): a universal joint's twist about its shafts (the part of the relative rotation about
+// frame X: its swings turn about axes across it), a hinge's axis tilting (frame Z), a fixed joint's or a slider's
+// whole rotation. Those parts no motor can follow either (JointMotorConstraint drives the free axes only).
+void animationLockedExcess(const bullet::Ragdoll& doll, std::span<const figure::BodyState> target, TrackResult& r) {
+    const auto& constraints = doll.figure().constraints;
+    for (std::size_t ci = 0; ci < constraints.size(); ++ci) {
+        const figure::FigureConstraint& c = constraints[ci];
+        const figure::RotationHold hold = figure::freedomOf(c.type).rotation;
+        if (hold == figure::RotationHold::None) continue;
+        const auto& [inBody1, inBody2] = doll.constraintFramesLocal(static_cast<int>(ci));
+        const btMatrix3x3 fa =
+            bullet::toBt(target[static_cast<std::size_t>(c.body1)].pose).getBasis() * inBody1.getBasis();
+        const btMatrix3x3 fb =
+            c.body2 < 0 ? inBody2.getBasis()
+                        : bullet::toBt(target[static_cast<std::size_t>(c.body2)].pose).getBasis() * inBody2.getBasis();
+        btQuaternion q;
+        (fa.transpose() * fb).getRotation(q);
+        const double w = std::abs(double(q.w())), x = std::abs(double(q.x()));
+        double rad = 0;
+        if (hold == figure::RotationHold::Twist) rad = 2 * std::atan2(x, w);
+        else if (hold == figure::RotationHold::AllButAxis)
+            rad = std::acos(std::clamp(double(fa.getColumn(2).dot(fb.getColumn(2))), -1.0, 1.0));
+        else rad = 2 * std::acos(std::min(1.0, w));
+        const double deg = rad * 180.0 / std::numbers::pi;
+        if (deg > r.animLockedExcessDeg) {
+            r.animLockedExcessDeg = deg;
+            r.animLockedJoint = c.name;
         }
     }
 }
@@ -297,6 +330,7 @@ struct TrackLoop {
             auto joints = anim.joints(t1, diags);
             if (!target || !joints) return false;
             animationLimitExcess(doll.figure(), *target, r);
+            animationLockedExcess(doll, *target, r);
             if (k == hitStep) applyHit(doll, *o.hit, k * dt, r);
             (void)doll.setKeyframeTargets(*target); // one finite state per body
             (void)doll.driveToPose(*target);

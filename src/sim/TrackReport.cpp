@@ -53,6 +53,11 @@ const std::vector<TrackField>& trackFields() {
          [](const R& r) { return json(r.cutMaxRelRadS); }},
         {"cut_body", "the body where it happened (empty when no body lies at the cut)",
          [](const R& r) { return json(r.cutBody); }},
+        {"anim_locked_excess_deg",
+         "largest turn of the animation's own pose about an axis a joint locks (a universal joint's twist, a hinge's "
+         "tilt, a fixed joint): a floor under the errors",
+         [](const R& r) { return json(r.animLockedExcessDeg); }},
+        {"anim_locked_joint", "the constraint where it happened", [](const R& r) { return json(r.animLockedJoint); }},
         {"hit_body", "the body --hit struck (empty without one)", [](const R& r) { return json(r.hitBody); }},
         {"hit_at_s", "when it struck", [](const R& r) { return jsonOrNull(r.hitAtS); }},
         {"pre_hit_max_m", "largest joint distance between the warm-up and the hit (0 without a hit)",

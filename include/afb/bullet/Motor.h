@@ -9,8 +9,9 @@
 namespace afb::bullet {
 
 /// How hard a joint motor drives toward its target. The spring and the damper are given as the natural frequency and
-/// damping ratio of the oscillator the motor makes of the joint's two bodies (their effective inertia about the
-/// driven axis), so one setting means the same on a hand and on a chest. The drive is implicit: its stiffness and
+/// damping ratio of the oscillator the motor makes of the inertia the joint carries about the driven axis (each side
+/// of the joint as one rigid body about its anchor, a side held by a keyframed body or the world left out;
+/// docs/motors.md), so one setting means the same on a hand and on a chest. The drive is implicit: its stiffness and
 /// damping enter the solve of the step (stable proportional-derivative control). A frequency above a quarter of the
 /// step rate acts as that quarter (15 Hz at a 60 Hz step): the stiffest drive a step holds without gaining energy,
 /// which already closes an error within a few steps. So no setting is unstable at any step.

@@ -21,6 +21,7 @@ namespace afb::bullet {
 
 class RagdollWorld;
 namespace detail {
+class CarriedInertia;
 class MultibodyRagdoll;
 class ObjectArena;
 class RagdollWorldLink;
@@ -423,7 +424,8 @@ class Ragdoll {
     bool drivable(int constraint) const;          ///< the joint type has free axes (its gains and target are kept)
     void applyMotorGains(std::size_t constraint); ///< m_motorGains to its motor, in or out of the world
     void regainStrength(double dt);               ///< a substep of a hit's regain (Action)
-    void freezeBodies();                          ///< rest as static bodies (RagdollWorld's frozen rest)
+    void beginMotorStep(); ///< before a RagdollWorld::step: each motor's carried inertia (CarriedInertia) now
+    void freezeBodies();   ///< rest as static bodies (RagdollWorld's frozen rest)
     void thawBodies();
     // What the RagdollWorld that spawned it reaches (spawn, sinking): src/bullet/RagdollWorldLink.h, the one way in.
     friend class detail::RagdollWorldLink;
@@ -477,11 +479,12 @@ class Ragdoll {
         btScalar offset = 0;
         btScalar speed = 0;
     };
-    std::vector<MotorGains> m_motorGains;        ///< per figure constraint; empty until motors are first set
-    std::vector<MotorTarget> m_motorTargets;     ///< per figure constraint
-    std::vector<JointMotorConstraint*> m_motors; ///< per figure constraint, null where none (owned by m_arena)
-    double m_motorStrength = 1;                  ///< setMotorStrength, lowered by a hit
-    double m_regainPerSecond = 0;                ///< the strength's rise per simulated second after a hit (0: none)
+    std::vector<MotorGains> m_motorGains;              ///< per figure constraint; empty until motors are first set
+    std::vector<MotorTarget> m_motorTargets;           ///< per figure constraint
+    std::vector<JointMotorConstraint*> m_motors;       ///< per figure constraint, null where none (owned by m_arena)
+    std::unique_ptr<detail::CarriedInertia> m_carried; ///< the tree of the rigids, for the motors' inertia
+    double m_motorStrength = 1;                        ///< setMotorStrength, lowered by a hit
+    double m_regainPerSecond = 0; ///< the strength's rise per simulated second after a hit (0: none)
     /// Keyframed bodies: each figure body's mode and target, and the step that moves the keyframed rigids.
     struct Keyframes {
         std::vector<BodyMode> modes;            ///< per figure body; empty while every body is simulated

@@ -88,6 +88,11 @@ struct TrackResult {
     /// animation's), rad/s, and that body (empty when no body lies at the cut).
     double cutMaxRelRadS = 0;
     std::string cutBody;
+    /// The largest turn of the animation's own pose about an axis a joint's type locks (a universal joint's twist
+    /// about its shafts, a hinge's axis tilting, a fixed joint's whole rotation), deg, against the figure's load
+    /// pose, and its constraint: another floor, since the joint holds and a motor drives only its free axes.
+    double animLockedExcessDeg = 0;
+    std::string animLockedJoint;
     bool exploded = false; ///< NaN, a speed over kExplodeSpeedMps or an anchor error over kExplodeAnchorM
     std::optional<double> explodedAtS;
     double maxSpeedMps = 0, maxAnchorErrorM = 0;
