@@ -49,6 +49,22 @@ rc=$?
 set -e
 [ $rc -eq 1 ] || fail "a result of another build: exit $rc, expected 1"
 grep -q "run-000001.json: error: made by another build" "$tmp/other.txt" || fail "$(cat "$tmp/other.txt")"
+# A result that found other input files than the plan's is refused; so are results of another manifest's plan.
+cp -r "$tmp/stress-res" "$tmp/stress-seen"
+sed -i -E 's/"inputs_seen":"[0-9a-f]{16}"/"inputs_seen":"0123456789abcdef"/' "$tmp/stress-seen/run-000003.json"
+set +e
+"$afb" merge "$tmp/stress-seen" --out "$tmp/x" 2> "$tmp/seen.txt"
+rc1=$?
+"$afb" merge "$tmp/stress-res" --out "$tmp/x" --manifest "$tmp/plan.txt" 2> /dev/null
+rc2=$?
+"$afb" plan stress --methods fast,default --scenarios tiny-bodies --yaws 3 --manifest "$tmp/stress3.jsonl" 2> /dev/null
+"$afb" merge "$tmp/stress-res" --out "$tmp/x" --manifest "$tmp/stress3.jsonl" 2> "$tmp/manifest3.txt"
+rc3=$?
+set -e
+[ $rc1 -eq 1 ] && grep -q "run-000003.json: error: ran on input files other than the plan's" "$tmp/seen.txt" ||
+  fail "a result of other inputs: exit $rc1: $(cat "$tmp/seen.txt")"
+[ $rc2 -eq 1 ] && [ $rc3 -eq 1 ] && grep -q "stress3.jsonl: error: the results in .* are not of this manifest's plan" \
+  "$tmp/manifest3.txt" || fail "results of another manifest: exits $rc2 $rc3: $(cat "$tmp/manifest3.txt")"
 
 # Command lines that make no sense: exit 2.
 set +e
@@ -63,7 +79,9 @@ set -e
 grep -q "has 4 runs (0..3)" "$tmp/past.txt" || fail "--index past the end: $(cat "$tmp/past.txt")"
 # SLURM_ARRAY_TASK_ID selects the line when no option does.
 SLURM_ARRAY_TASK_ID=1 "$afb" run --manifest "$tmp/stress.jsonl" --out "$tmp/slurm-env" > /dev/null
-[ "$(ls "$tmp/slurm-env")" = "run-000001.json" ] || fail "SLURM_ARRAY_TASK_ID=1 wrote $(ls "$tmp/slurm-env")"
+[ "$(cd "$tmp/slurm-env" && ls run-*)" = "run-000001.json" ] || fail "SLURM_ARRAY_TASK_ID=1 wrote $(ls "$tmp/slurm-env")"
+# Beside the results, the plan they name: the merge needs no manifest.
+[ "$(cd "$tmp/slurm-env" && ls plan-*.json | wc -l)" -eq 1 ] || fail "afb run left no plan file beside its result"
 
 # --- chart: 1 figure x 2 methods x 2 repeats in two shards, on a copy of the content ---------------------------
 mkdir -p "$tmp/content"
