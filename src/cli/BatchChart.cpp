@@ -95,10 +95,10 @@ class ChartJob : public BatchJob {
         if (runs.size() != results.size()) throw std::runtime_error("the results are not the plan's runs");
         std::map<std::string, const bullet::Method*> methods;
         for (const sim::ChartMethod& m : m_opt.chart.methods) methods.emplace(m.label, &m.method);
-        for (std::size_t i = 0; i < runs.size(); ++i) {
+        sim::forEachIndex(runs.size(), [&](std::size_t i) {
             runs[i].result = sim::dropResultFromExact(json::parse(results[i]));
             runs[i].result.method = *methods.at(runs[i].label);
-        }
+        });
         ChartCli opt = m_opt;
         if (!out.empty()) opt.out = out;
         std::error_code ec;

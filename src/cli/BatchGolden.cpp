@@ -127,9 +127,9 @@ class GoldenJob : public BatchJob {
         char host[128] = "host";
         ::gethostname(host, sizeof host - 1);
         if (!opt.report.empty())
-            opt.report = std::filesystem::temp_directory_path() / ("afb-golden-" + std::string(host) + "-" +
-                                                                   std::to_string(::getpid()) + "-" +
-                                                                   std::to_string(serial++));
+            opt.report =
+                std::filesystem::temp_directory_path() /
+                ("afb-golden-" + std::string(host) + "-" + std::to_string(::getpid()) + "-" + std::to_string(serial++));
         std::error_code ec;
         if (!opt.report.empty() && !std::filesystem::create_directories(opt.report, ec))
             throw std::runtime_error("cannot create " + opt.report.string());

@@ -99,6 +99,10 @@ std::string resultFileText(const PlannedRun& line, const nlohmann::json& inputsS
 /// Every result file of `dir` (run-*.json), by index. Files that do not parse are errors ("FILE: error: …").
 std::map<std::size_t, RunResult> readResults(const std::filesystem::path& dir, std::vector<std::string>& errors);
 
+/// Calls fn(0) … fn(n - 1) on up to 8 threads (the machine's cores), each index once, in no set order; rethrows the
+/// first exception thrown (the indices not yet started are then skipped).
+void forEachIndex(std::size_t n, const std::function<void(std::size_t)>& fn);
+
 /// Where the plan of results is kept for a merge without the manifest: DIR/plan-HASH.json (HASH: planHash()).
 std::filesystem::path planFilePath(const std::filesystem::path& dir, std::uint64_t planHash);
 /// The plan file's text: manifestHead() as one JSON object.
