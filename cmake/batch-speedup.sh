@@ -31,8 +31,8 @@ measure() {
 sharded() {
   rm -rf "$work/results" "$work/merged"
   "$afb" plan chart "${chart[@]}" --manifest "$work/runs.jsonl" 2> /dev/null
-  seq 0 15 | parallel --will-cite -j 2 "$afb" run --manifest "$work/runs.jsonl" --shard {}/16 \
-    --out "$work/results" > /dev/null
+  seq 0 15 | parallel --will-cite -j 2 /usr/bin/time -o "$work/shard-{}.time" -f %U,%S \
+    "$afb" run --manifest "$work/runs.jsonl" --shard {}/16 --out "$work/results" > /dev/null
   "$afb" merge "$work/results" --out "$work/merged" > /dev/null
 }
 
@@ -45,5 +45,11 @@ for r in $(seq "$rounds"); do
   measure sharded bash -c "chart=(${chart[*]}); sharded"
   echo "load after round $r: $(uptime | sed 's/.*load average: //')"
 done
-awk '$1 == "one-process" { oc += $2; ow += $3 } $1 == "sharded" { sc += $2; sw += $3 }
-  END { printf "sharded / one-process: wall %.2f, CPU %.2f\n", sw / ow, sc / oc }' "$work/times"
+awk '$1 == "one-process" { oc += $2; ow += $3; n++ } $1 == "sharded" { sc += $2; sw += $3 }
+  END { printf "sharded / one-process: wall %.2f, CPU %.2f\n", sw / ow, sc / oc; print oc / n > "'"$work"'/one-cpu" }' \
+  "$work/times"
+# On two free cores: the last round's shards by their CPU times, started in order on whichever core frees first
+# (as parallel -j 2 starts them), against the one-process CPU time (a core of its own).
+for k in $(seq 0 15); do awk -F, '{ print $1 + $2 }' "$work/shard-$k.time"; done |
+  awk -v one="$(cat "$work/one-cpu")" '{ if (a <= b) a += $1; else b += $1; t += $1 }
+    END { m = a > b ? a : b; printf "16 shards on 2 free cores: %.1f s (the busier core; %.1f s of shards in all) = %.2f x one core'"'"'s %.1f s\n", m, t, m / one, one }' 
