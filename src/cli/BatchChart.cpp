@@ -81,16 +81,24 @@ class ChartJob : public BatchJob {
         if (!method || r.figure >= m_figures.size()) throw std::runtime_error("not a run of this plan: " + run.dump());
         sim::DropResult result =
             sim::runDrop(m_figures[r.figure], sim::chartDropOptions(m_opt.chart, r, method->method));
-        // A chart reports no pose: the result file keeps the numbers it writes.
+        // A chart reports no pose: the result file keeps the numbers it writes. The method is the plan's (the
+        // merge puts it back): a result file holds the measurements, not the method's every knob again.
         result.finalPose.clear();
         result.firstBodies.clear();
-        return sim::dropResultExact(result);
+        json exact = sim::dropResultExact(result);
+        exact.erase("method");
+        return exact;
     }
 
-    int merge(const std::vector<json>& results, const std::filesystem::path& out) override {
+    int merge(const std::vector<std::string_view>& results, const std::filesystem::path& out) override {
         std::vector<sim::ChartRun> runs = sim::chartRuns(m_names.size(), m_opt.chart);
         if (runs.size() != results.size()) throw std::runtime_error("the results are not the plan's runs");
-        for (std::size_t i = 0; i < runs.size(); ++i) runs[i].result = sim::dropResultFromExact(results[i]);
+        std::map<std::string, const bullet::Method*> methods;
+        for (const sim::ChartMethod& m : m_opt.chart.methods) methods.emplace(m.label, &m.method);
+        sim::forEachIndex(runs.size(), [&](std::size_t i) {
+            runs[i].result = sim::dropResultFromExact(json::parse(results[i]));
+            runs[i].result.method = *methods.at(runs[i].label);
+        });
         ChartCli opt = m_opt;
         if (!out.empty()) opt.out = out;
         std::error_code ec;

@@ -47,7 +47,8 @@ std::unique_ptr<BatchJob> makeBatchJob(const std::string& command, const nlohman
     if (command == "stress") return makeStressJob(plan, forRunning, error);
     if (command == "chart") return makeChartJob(plan, forRunning, error);
     if (command == "drop") return makeDropJob(plan, forRunning, error);
-    error = "unknown command '" + command + "' (stress, chart, drop)";
+    if (command == "golden") return makeGoldenJob(plan, error);
+    error = "unknown command '" + command + "' (stress, chart, drop, golden)";
     return nullptr;
 }
 

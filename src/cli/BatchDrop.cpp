@@ -86,9 +86,9 @@ class DropJob : public BatchJob {
         return sim::dropResultExact(dropOne(m_opt, m_figures[i]));
     }
 
-    int merge(const std::vector<json>& results, const std::filesystem::path& out) override {
+    int merge(const std::vector<std::string_view>& results, const std::filesystem::path& out) override {
         std::vector<sim::DropResult> drops;
-        for (const json& r : results) drops.push_back(sim::dropResultFromExact(r));
+        for (const std::string_view r : results) drops.push_back(sim::dropResultFromExact(json::parse(r)));
         if (drops.size() != m_opt.entities.size()) throw std::runtime_error("the results are not the plan's runs");
         DropCli opt = m_opt;
         if (!out.empty()) {

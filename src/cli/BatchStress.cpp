@@ -66,9 +66,9 @@ class StressJob : public BatchJob {
         return sim::stressResultExact(sim::runStressRun(yawed, scenario->name, *method, {}, yawDeg));
     }
 
-    int merge(const std::vector<json>& results, const std::filesystem::path& out) override {
+    int merge(const std::vector<std::string_view>& results, const std::filesystem::path& out) override {
         std::vector<sim::StressResult> runs;
-        for (const json& r : results) runs.push_back(sim::stressResultFromExact(r));
+        for (const std::string_view r : results) runs.push_back(sim::stressResultFromExact(json::parse(r)));
         const std::filesystem::path dir = out.empty() ? m_opt.out : out;
         std::error_code ec;
         std::filesystem::create_directories(dir, ec);

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "Commands.h"
+#include "GoldenCli.h"
 #include "GoldenReport.h"
 #include "MethodOptions.h"
 #include "Usage.h"
@@ -139,13 +140,6 @@ void addRecordCommand(CLI::App* golden, int& exitCode) {
     });
 }
 
-struct Compare {
-    std::vector<std::filesystem::path> files;
-    bool exact = false;
-    bool ignoreInputs = false;
-    std::filesystem::path junit, report;
-};
-
 // A golden file's scenario, checked: the record, its content folder and drop options.
 struct Golden {
     nlohmann::json g;
@@ -182,7 +176,7 @@ std::optional<Golden> readGolden(const std::filesystem::path& file, bool ignoreI
         out.errors = changed;
         return std::nullopt;
     }
-    for (const std::string& c : changed) std::cerr << c << "\n";
+    for (const std::string& c : changed) out.warnings += c + "\n";
     if (const std::string err = sim::dropOptionsFromJson(g.at("options"), golden.options); !err.empty()) {
         out.errors.push_back(file.string() + ": error: " + err);
         return std::nullopt;
@@ -258,23 +252,13 @@ void comparePose(const nlohmann::json& g, const sim::DropResult& result, bool ex
                  (!exact || out.notes.front() == "state hash equal");
 }
 
-// A file name in the report folder for the picture of `c`, unique among `taken`.
-std::filesystem::path pictureName(const GoldenCase& c, std::vector<std::filesystem::path>& taken) {
-    const std::string stem = c.file.stem().string().empty() ? "golden" : c.file.stem().string();
-    std::filesystem::path name = stem + ".png";
-    for (int k = 2; std::find(taken.begin(), taken.end(), name) != taken.end(); ++k)
-        name = stem + "-" + std::to_string(k) + ".png";
-    taken.push_back(name);
-    return name;
-}
-
 // Draws a failing golden's settled pose over its recorded one into the report folder.
-void drawFailure(const Compare& cmp, const Golden& golden, const Run& run, GoldenCase& c,
+void drawFailure(const GoldenCompareCli& cmp, const Golden& golden, const Run& run, GoldenCase& c,
                  std::vector<std::filesystem::path>& taken) {
     const PoseRecord recorded = recordedPose(golden.g);
     if (recorded.jointsModel.size() != static_cast<std::size_t>(run.figure->skeleton.jointCount()))
         return; // a record of another skeleton: nothing to overlay
-    const std::filesystem::path name = pictureName(c, taken);
+    const std::filesystem::path name = goldenPictureName(c, taken);
     char subtitle[160];
     std::snprintf(subtitle, sizeof subtitle, "%zu joints past tolerance; worst %.4f m / %.2f deg", c.missed.size(),
                   c.worstM, c.worstDeg);
@@ -284,9 +268,10 @@ void drawFailure(const Compare& cmp, const Golden& golden, const Run& run, Golde
     else c.picture = name;
 }
 
-// Re-runs one golden file.
-GoldenCase compareOne(const std::filesystem::path& file, const Compare& cmp,
-                      std::vector<std::filesystem::path>& pictures) {
+} // namespace
+
+GoldenCase compareGolden(const std::filesystem::path& file, const GoldenCompareCli& cmp,
+                         std::vector<std::filesystem::path>& pictures) {
     GoldenCase c;
     c.file = file;
     const auto t0 = std::chrono::steady_clock::now();
@@ -301,7 +286,7 @@ GoldenCase compareOne(const std::filesystem::path& file, const Compare& cmp,
             if (c.errors.empty()) c.errors.push_back(file.string() + ": error: the scenario did not run");
             return c;
         }
-        printDiagnostics(diags); // warnings
+        c.warnings += diags.str(); // warnings
         comparePose(golden->g, *run.result, cmp.exact, c);
         if (!c.passed && !c.missed.empty() && !cmp.report.empty()) drawFailure(cmp, *golden, run, c, pictures);
     } catch (const std::exception& e) {
@@ -311,22 +296,88 @@ GoldenCase compareOne(const std::filesystem::path& file, const Compare& cmp,
     return c;
 }
 
+std::filesystem::path goldenPictureName(const GoldenCase& c, std::vector<std::filesystem::path>& taken) {
+    const std::string stem = c.file.stem().string().empty() ? "golden" : c.file.stem().string();
+    std::filesystem::path name = stem + ".png";
+    for (int k = 2; std::find(taken.begin(), taken.end(), name) != taken.end(); ++k)
+        name = stem + "-" + std::to_string(k) + ".png";
+    taken.push_back(name);
+    return name;
+}
+
+std::FILE* goldenTextStream(const GoldenCompareCli& opt) { return opt.junit == "-" ? stderr : stdout; }
+
+void printGoldenCase(const GoldenCase& c, std::FILE* text) {
+    std::fputs(c.warnings.c_str(), stderr);
+    for (const std::string& e : c.errors) std::fprintf(stderr, "%s\n", e.c_str());
+    if (c.errors.empty()) std::fprintf(text, "%s\n", caseLine(c).c_str());
+    for (const JointMiss& m : c.missed)
+        std::fprintf(text, "  %-20s moved %.4f m, turned %.2f deg\n", m.joint.c_str(), m.movedM, m.turnedDeg);
+    std::fflush(text);
+}
+
+int finishGoldenCompare(const GoldenCompareCli& opt, const std::vector<GoldenCase>& cases, std::size_t pictures) {
+    int exitCode = 0;
+    for (const GoldenCase& c : cases)
+        if (!c.passed) exitCode = kExitFailure;
+    std::optional<std::string> error;
+    if (!opt.junit.empty()) error = writeJUnit(cases, opt.junit);
+    if (!error && !opt.report.empty()) error = writeMarkdown(cases, opt.report);
+    if (error) {
+        std::cerr << "afb golden compare: " << *error << "\n";
+        return kExitFailure;
+    }
+    std::FILE* text = goldenTextStream(opt);
+    if (!opt.junit.empty() && opt.junit != "-")
+        std::fprintf(text, "afb golden compare: JUnit report -> %s\n", opt.junit.c_str());
+    if (!opt.report.empty())
+        std::fprintf(text, "afb golden compare: report -> %s (%zu pictures)\n", (opt.report / "summary.md").c_str(),
+                     pictures);
+    return exitCode;
+}
+
+void addGoldenCompareOptions(CLI::App* compare, GoldenCompareCli& cmp) {
+    compare->add_option("files", cmp.files, "Golden files")->required();
+    compare->add_flag("--exact", cmp.exact, "Also demand the bit-exact state hash (same build, same machine class)");
+    compare->add_flag("--ignore-inputs", cmp.ignoreInputs,
+                      "Compare poses even when input files changed since recording (they are still listed)");
+    compare->add_option("--junit", cmp.junit,
+                        "Write a JUnit XML report (one test case per golden; '-': stdout, which then holds only it)");
+    compare->add_option("--report", cmp.report,
+                        "Write DIR/summary.md and, per failing golden, DIR/NAME.png: the settled pose (orange) over "
+                        "the golden pose (blue)");
+}
+
+nlohmann::json goldenInputs(const std::filesystem::path& file, const std::filesystem::path& base) {
+    const std::filesystem::path root = std::filesystem::absolute(base);
+    const auto rel = [&](const std::filesystem::path& p) {
+        return std::filesystem::relative(std::filesystem::absolute(p), root).generic_string();
+    };
+    nlohmann::json inputs = nlohmann::json::object();
+    inputs[rel(file)] = fileHash(file);
+    text::Diagnostics diags;
+    const auto data = text::readFile(file, diags);
+    const nlohmann::json g = data ? nlohmann::json::parse(*data, nullptr, false) : nlohmann::json();
+    if (!g.is_object() || !g.contains("base") || !g.at("base").is_string() || !g.contains("inputs") ||
+        !g.at("inputs").is_object())
+        return inputs;
+    const std::filesystem::path goldenBase =
+        std::filesystem::absolute(file).parent_path() / g.at("base").get<std::string>();
+    for (const auto& [path, hash] : g.at("inputs").items())
+        inputs[rel(goldenBase / path)] = fileHash(goldenBase / path);
+    return inputs;
+}
+
+namespace {
+
 void addCompareCommand(CLI::App* golden, int& exitCode) {
-    auto cmp = std::make_shared<Compare>();
+    auto cmp = std::make_shared<GoldenCompareCli>();
     auto* compare = golden->add_subcommand("compare", "Re-run golden scenarios; exit 1 when a joint moved past its "
                                                       "tolerance or an input changed\n"
                                                       "Examples:\n  afb golden compare tests/golden/*.json\n"
                                                       "  afb golden compare --junit goldens.xml --report golden-report "
                                                       "tests/golden/*.json");
-    compare->add_option("files", cmp->files, "Golden files")->required();
-    compare->add_flag("--exact", cmp->exact, "Also demand the bit-exact state hash (same build, same machine class)");
-    compare->add_flag("--ignore-inputs", cmp->ignoreInputs,
-                      "Compare poses even when input files changed since recording (they are still listed)");
-    compare->add_option("--junit", cmp->junit,
-                        "Write a JUnit XML report (one test case per golden; '-': stdout, which then holds only it)");
-    compare->add_option("--report", cmp->report,
-                        "Write DIR/summary.md and, per failing golden, DIR/NAME.png: the settled pose (orange) over "
-                        "the golden pose (blue)");
+    addGoldenCompareOptions(compare, *cmp);
     compare->callback([cmp, &exitCode] {
         if (!cmp->report.empty()) {
             std::error_code ec;
@@ -337,33 +388,13 @@ void addCompareCommand(CLI::App* golden, int& exitCode) {
                 return;
             }
         }
-        // With the JUnit report on stdout, the lines for people go to stderr.
-        std::FILE* text = cmp->junit == "-" ? stderr : stdout;
         std::vector<GoldenCase> cases;
         std::vector<std::filesystem::path> pictures;
         for (const std::filesystem::path& file : cmp->files) {
-            cases.push_back(compareOne(file, *cmp, pictures));
-            const GoldenCase& c = cases.back();
-            for (const std::string& e : c.errors) std::fprintf(stderr, "%s\n", e.c_str());
-            if (c.errors.empty()) std::fprintf(text, "%s\n", caseLine(c).c_str());
-            for (const JointMiss& m : c.missed)
-                std::fprintf(text, "  %-20s moved %.4f m, turned %.2f deg\n", m.joint.c_str(), m.movedM, m.turnedDeg);
-            std::fflush(text);
-            if (!c.passed) exitCode = kExitFailure;
+            cases.push_back(compareGolden(file, *cmp, pictures));
+            printGoldenCase(cases.back(), goldenTextStream(*cmp));
         }
-        std::optional<std::string> error;
-        if (!cmp->junit.empty()) error = writeJUnit(cases, cmp->junit);
-        if (!error && !cmp->report.empty()) error = writeMarkdown(cases, cmp->report);
-        if (error) {
-            std::cerr << "afb golden compare: " << *error << "\n";
-            exitCode = kExitFailure;
-            return;
-        }
-        if (!cmp->junit.empty() && cmp->junit != "-")
-            std::fprintf(text, "afb golden compare: JUnit report -> %s\n", cmp->junit.c_str());
-        if (!cmp->report.empty())
-            std::fprintf(text, "afb golden compare: report -> %s (%zu pictures)\n",
-                         (cmp->report / "summary.md").c_str(), pictures.size());
+        exitCode = finishGoldenCompare(*cmp, cases, pictures.size());
     });
 }
 

@@ -15,7 +15,7 @@ namespace {
 
 struct MergeCli {
     std::filesystem::path dir, out;
-    std::filesystem::path manifest; // only for the hint printed when results are missing
+    std::filesystem::path manifest; // every result checked against its line; named in the hint for missing ones
 };
 
 // "3, 7, 12-15": the indices, consecutive ones as ranges.
@@ -31,22 +31,53 @@ std::string ranges(const std::vector<std::size_t>& indices) {
     return out;
 }
 
-// Refuses results that do not belong together: another plan, another build, inputs other than the plan's. Prints
-// each and returns false.
-bool consistent(const std::map<std::size_t, sim::RunResult>& results, const sim::PlannedRun& first) {
-    bool ok = true;
-    const std::string self = buildIdentity();
-    if (first.build != self) {
-        std::cerr << "afb merge: error: the results were made by " << first.build << "; this is " << self
-                  << " (merge with the build that ran them)\n";
-        return false;
+// The plan most results name: the one the others are checked against.
+std::uint64_t majorityPlan(const std::map<std::size_t, sim::RunResult>& results) {
+    std::map<std::uint64_t, std::size_t> votes;
+    for (const auto& [index, r] : results) ++votes[r.plan];
+    return std::max_element(votes.begin(), votes.end(),
+                            [](const auto& a, const auto& b) { return a.second < b.second; })
+        ->first;
+}
+
+// The plan named `hash` (a line without index, inputs and run): the manifest's first line with --manifest, which
+// also gives every line's hash in `lineHashes`, else the plan file afb run left beside the results.
+std::optional<sim::PlannedRun> loadPlan(const MergeCli& opt, std::uint64_t hash,
+                                        std::vector<std::uint64_t>& lineHashes) {
+    std::string error;
+    if (opt.manifest.empty()) {
+        auto plan = sim::readPlanFile(sim::planFilePath(opt.dir, hash), hash, error);
+        if (!plan) std::cerr << error << "\n  (afb run writes it; or give --manifest)\n";
+        return plan;
     }
+    auto m = sim::readManifest(
+        opt.manifest, [](std::size_t i) { return i == 0; }, error, true);
+    if (!m || m->lines.empty()) {
+        std::cerr << (m ? opt.manifest.string() + ": error: no lines" : error) << "\n";
+        return std::nullopt;
+    }
+    if (sim::planHash(m->lines.front()) != hash) {
+        std::cerr << opt.manifest.string() << ": error: the results in " << opt.dir.string()
+                  << " are not of this manifest's plan\n";
+        return std::nullopt;
+    }
+    lineHashes = std::move(m->lineHashes);
+    return std::move(m->lines.front());
+}
+
+// Refuses results that do not belong together: another build, another plan, another line than the manifest's,
+// inputs other than the plan's. Prints each and returns false.
+bool consistent(const std::map<std::size_t, sim::RunResult>& results, const sim::PlannedRun& plan,
+                const std::vector<std::uint64_t>& lineHashes, const MergeCli& opt) {
+    bool ok = true;
+    const std::uint64_t hash = sim::planHash(plan);
     for (const auto& [index, r] : results) {
         std::string why;
-        if (r.line.build != first.build) why = "made by another build: " + r.line.build;
-        else if (r.line.command != first.command || r.line.runs != first.runs || r.line.plan != first.plan)
-            why = "from another plan";
-        else if (r.inputsSeen != r.line.inputs) why = "ran on input files other than the plan's";
+        if (r.build != plan.build) why = "made by another build: " + r.build;
+        else if (r.plan != hash || r.command != plan.command || r.runs != plan.runs) why = "from another plan";
+        else if (!lineHashes.empty() && (index >= lineHashes.size() || r.line != lineHashes[index]))
+            why = "not the result of line " + std::to_string(index + 1) + " of " + opt.manifest.string();
+        else if (r.inputsSeen != r.inputs) why = "ran on input files other than the plan's";
         if (why.empty()) continue;
         std::cerr << r.file.string() << ": error: " << why << "\n";
         ok = false;
@@ -54,17 +85,17 @@ bool consistent(const std::map<std::size_t, sim::RunResult>& results, const sim:
     return ok;
 }
 
-// The line most results share (their plan, build and run count): the one the others are checked against.
-const sim::PlannedRun& majorityLine(const std::map<std::size_t, sim::RunResult>& results) {
-    std::map<std::string, std::pair<std::size_t, const sim::PlannedRun*>> votes;
-    for (const auto& [index, r] : results) {
-        auto& vote = votes[r.line.command + "\n" + r.line.build + "\n" + std::to_string(r.line.runs) + "\n" +
-                           r.line.plan.dump()];
-        if (vote.first++ == 0) vote.second = &r.line;
-    }
-    const auto best = std::max_element(votes.begin(), votes.end(),
-                                       [](const auto& a, const auto& b) { return a.second.first < b.second.first; });
-    return *best->second.second;
+// Names the missing indices on stderr; true when none is missing.
+bool complete(const std::map<std::size_t, sim::RunResult>& results, std::size_t runs, const MergeCli& opt) {
+    std::vector<std::size_t> missing;
+    for (std::size_t i = 0; i < runs; ++i)
+        if (!results.count(i)) missing.push_back(i);
+    if (missing.empty()) return true;
+    std::cerr << "afb merge: " << missing.size() << " of " << runs << " results missing in " << opt.dir.string() << ": "
+              << ranges(missing) << "\n  run them: afb run --manifest "
+              << (opt.manifest.empty() ? std::string("MANIFEST") : opt.manifest.string()) << " --resume --out "
+              << opt.dir.string() << "\n";
+    return false;
 }
 
 int mergeCommand(const MergeCli& opt, char** argv) {
@@ -76,30 +107,30 @@ int mergeCommand(const MergeCli& opt, char** argv) {
         std::cerr << opt.dir.string() << ": error: no result files (run-*.json) of afb run\n";
         return kExitFailure;
     }
-    const sim::PlannedRun& first = majorityLine(results);
-    if (first.precision != sim::bulletPrecision()) {
-        execOtherPrecision(first.precision, argv, "afb merge");
+    const std::uint64_t hash = majorityPlan(results);
+    for (const auto& [index, r] : results)
+        if (r.plan == hash && r.precision != sim::bulletPrecision()) {
+            execOtherPrecision(r.precision, argv, "afb merge");
+            return kExitFailure;
+        }
+    std::vector<std::uint64_t> lineHashes;
+    const std::optional<sim::PlannedRun> plan = loadPlan(opt, hash, lineHashes);
+    if (!plan) return kExitFailure;
+    if (const std::string self = buildIdentity(); plan->build != self) {
+        std::cerr << "afb merge: error: the results were made by " << plan->build << "; this is " << self
+                  << " (merge with the build that ran them)\n";
         return kExitFailure;
     }
-    if (!consistent(results, first)) return kExitFailure;
-    std::vector<std::size_t> missing;
-    for (std::size_t i = 0; i < first.runs; ++i)
-        if (!results.count(i)) missing.push_back(i);
-    if (!missing.empty()) {
-        std::cerr << "afb merge: " << missing.size() << " of " << first.runs << " results missing in "
-                  << opt.dir.string() << ": " << ranges(missing) << "\n  run them: afb run --manifest "
-                  << (opt.manifest.empty() ? std::string("MANIFEST") : opt.manifest.string()) << " --resume --out "
-                  << opt.dir.string() << "\n";
-        return kExitFailure;
-    }
+    if (!consistent(results, *plan, lineHashes, opt) || !complete(results, plan->runs, opt)) return kExitFailure;
     std::string error;
-    const std::unique_ptr<BatchJob> job = makeBatchJob(first.command, first.plan, false, error);
+    const std::unique_ptr<BatchJob> job = makeBatchJob(plan->command, plan->plan, false, error);
     if (!job) {
         std::cerr << results.begin()->second.file.string() << ": error: " << error << "\n";
         return kExitFailure;
     }
-    std::vector<nlohmann::json> ordered;
-    for (const auto& [index, r] : results) ordered.push_back(r.result);
+    std::vector<std::string_view> ordered;
+    ordered.reserve(results.size());
+    for (const auto& [index, r] : results) ordered.emplace_back(r.result);
     try {
         return job->merge(ordered, opt.out);
     } catch (const std::exception& e) {
@@ -117,13 +148,16 @@ void addMergeCommand(CLI::App& app, int& exitCode, char** argv) {
                                             "  afb merge results --out chart --manifest runs.jsonl");
     cmd->footer("Writes what the planned command writes (stress: stress.md, stress.json, the heat map; chart: "
                 "runs.csv, summary.md, front.*; drop: the table, and --json/--csv as planned, or drop.json and "
-                "drop.csv in --out), equal to a one-process run but for timings. Refuses results of another plan, "
-                "another build or precision, or other input files; names missing indices on stderr and exits 1 "
-                "(afb run --resume runs them).");
+                "drop.csv in --out; golden compare: its lines, the --junit file and the --report folder as "
+                "planned, or OUT/junit.xml and OUT as the report, exit 1 when a golden failed), equal to a "
+                "one-process run but for timings. Refuses results of another plan, another build or precision, or "
+                "other input files; names missing indices on stderr and exits 1 (afb run --resume runs them).");
     auto opt = std::make_shared<MergeCli>();
     cmd->add_option("dir", opt->dir, "Folder of the result files")->required();
     cmd->add_option("--out", opt->out, "Output folder (default: the command's --out as planned)");
-    cmd->add_option("--manifest", opt->manifest, "The manifest, named in the hint for missing results");
+    cmd->add_option("--manifest", opt->manifest,
+                    "The manifest: the plan read from it and every result checked against its line (default: the "
+                    "plan file afb run writes beside the results)");
     cmd->callback([opt, &exitCode, argv] { exitCode = mergeCommand(*opt, argv); });
 }
 

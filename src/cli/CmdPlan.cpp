@@ -43,7 +43,9 @@ void addPlanCommand(CLI::App& app, int& exitCode, char** argv) {
     auto* plan = app.add_subcommand("plan", "Write a command's runs as a manifest (JSON lines) for afb run and merge\n"
                                             "Examples:\n"
                                             "  afb plan stress --base . --yaws 4 --manifest runs.jsonl\n"
-                                            "  afb plan chart --base . humanoid --repeats 5 --manifest runs.jsonl");
+                                            "  afb plan chart --base . humanoid --repeats 5 --manifest runs.jsonl\n"
+                                            "  afb plan golden compare --junit goldens.xml tests/golden/*.json "
+                                            "--manifest runs.jsonl");
     plan->footer("Each line is one independent run: its command, its own values (entity, method, height, rate, "
                  "yaw, repeat), the command's options, the hashes of every input file, and the build (version, "
                  "Bullet, precision, build type, compiler) that must run it. afb run --manifest FILE --index I runs "
@@ -55,6 +57,7 @@ void addPlanCommand(CLI::App& app, int& exitCode, char** argv) {
     addPlanStress(plan, exitCode, argv, manifest, emit);
     addPlanChart(plan, exitCode, argv, manifest, emit);
     addPlanDrop(plan, exitCode, argv, manifest, emit);
+    addPlanGolden(plan, exitCode, manifest, emit);
 }
 
 } // namespace afb::cli

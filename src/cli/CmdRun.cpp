@@ -106,7 +106,7 @@ std::vector<sim::PlannedRun> missingOnly(const RunCli& opt, std::vector<sim::Pla
     const std::map<std::size_t, sim::RunResult> done = sim::readResults(opt.out, errors);
     std::erase_if(lines, [&](const sim::PlannedRun& line) {
         const auto r = done.find(line.index);
-        return r != done.end() && sim::manifestLineJson(r->second.line) == sim::manifestLineJson(line);
+        return r != done.end() && r->second.line == line.lineHash && r->second.inputsSeen == r->second.inputs;
     });
     return lines;
 }
@@ -142,7 +142,7 @@ int runCommand(const RunCli& opt, char** argv) {
         std::printf("afb run: no line of %s selected\n", opt.manifest.string().c_str());
         return 0;
     }
-    const sim::PlannedRun& first = lines.front();
+    const sim::PlannedRun first = lines.front(); // a copy: --resume below changes `lines`
     if (first.precision != sim::bulletPrecision()) {
         execOtherPrecision(first.precision, argv, "afb run");
         return kExitFailure;
@@ -160,6 +160,12 @@ int runCommand(const RunCli& opt, char** argv) {
         std::cerr << "afb run: cannot create " << opt.out.string() << ": " << ec.message() << "\n";
         return kExitFailure;
     }
+    // The plan beside the results, for a merge without the manifest (written once; every process writes the same).
+    if (const auto plan = sim::planFilePath(opt.out, sim::planHash(first)); !std::filesystem::exists(plan, ec))
+        if (const std::string e = sim::writeAtomically(plan, sim::planFileText(first)); !e.empty()) {
+            std::cerr << "afb run: " << e << "\n";
+            return kExitFailure;
+        }
     if (opt.resume) lines = missingOnly(opt, std::move(lines));
     if (lines.empty()) {
         std::printf("afb run: every selected result is in %s\n", opt.out.string().c_str());

@@ -25,6 +25,9 @@ struct GoldenCase {
     /// Why the golden could not be compared (not a golden file, an input changed, a method that cannot run), one
     /// message per line; empty when it was compared.
     std::vector<std::string> errors;
+    /// What compare printed on stderr about the golden that did not stop it (an input changed but compared anyway
+    /// with --ignore-inputs, the loader's warnings), lines ending in newlines.
+    std::string warnings;
     double worstM = 0, worstDeg = 0;         ///< the joint that moved most, and the one that turned most
     double toleranceM = 0, toleranceDeg = 0; ///< the golden's tolerances
     std::vector<JointMiss> missed;           ///< the joints past tolerance, in skeleton order

@@ -118,7 +118,8 @@ DropResult dropResultFromExact(const json& j) {
     DropResult r;
     r.figure = j.at("figure").get<std::string>();
     r.precision = j.at("precision").get<std::string>();
-    if (std::string e = methodFromJson(j.at("method"), r.method); !e.empty()) throw std::runtime_error(e);
+    if (const auto m = j.find("method"); m != j.end())
+        if (std::string e = methodFromJson(*m, r.method); !e.empty()) throw std::runtime_error(e);
     const json& counts = j.at("counts");
     r.bodies = counts.at(0).get<int>();
     r.constraints = counts.at(1).get<int>();

@@ -2,7 +2,8 @@
 # cli.batch: afb plan, run and merge against the one-process commands. A stress matrix run line by line and a
 # chart run in two shards merge into the command's own outputs (timings aside); a missing result is named and
 # --resume runs it alone; a run killed midway (SIGKILL) leaves no result file; results of another build, another
-# plan or changed inputs are refused; the GNU parallel recipe of docs/cluster.md (when parallel is installed).
+# plan or changed inputs are refused; golden compare in two shards, one golden failing, merged into compare's
+# JUnit file, report and exit code; the GNU parallel recipe of docs/cluster.md (when parallel is installed).
 # Arguments: AFB (the afb binary), SRC (repository root), TMP (scratch folder).
 set -euo pipefail
 afb="$1" src="$2" tmp="$3"
@@ -48,6 +49,22 @@ rc=$?
 set -e
 [ $rc -eq 1 ] || fail "a result of another build: exit $rc, expected 1"
 grep -q "run-000001.json: error: made by another build" "$tmp/other.txt" || fail "$(cat "$tmp/other.txt")"
+# A result that found other input files than the plan's is refused; so are results of another manifest's plan.
+cp -r "$tmp/stress-res" "$tmp/stress-seen"
+sed -i -E 's/"inputs_seen":"[0-9a-f]{16}"/"inputs_seen":"0123456789abcdef"/' "$tmp/stress-seen/run-000003.json"
+set +e
+"$afb" merge "$tmp/stress-seen" --out "$tmp/x" 2> "$tmp/seen.txt"
+rc1=$?
+"$afb" merge "$tmp/stress-res" --out "$tmp/x" --manifest "$tmp/plan.txt" 2> /dev/null
+rc2=$?
+"$afb" plan stress --methods fast,default --scenarios tiny-bodies --yaws 3 --manifest "$tmp/stress3.jsonl" 2> /dev/null
+"$afb" merge "$tmp/stress-res" --out "$tmp/x" --manifest "$tmp/stress3.jsonl" 2> "$tmp/manifest3.txt"
+rc3=$?
+set -e
+[ $rc1 -eq 1 ] && grep -q "run-000003.json: error: ran on input files other than the plan's" "$tmp/seen.txt" ||
+  fail "a result of other inputs: exit $rc1: $(cat "$tmp/seen.txt")"
+[ $rc2 -eq 1 ] && [ $rc3 -eq 1 ] && grep -q "stress3.jsonl: error: the results in .* are not of this manifest's plan" \
+  "$tmp/manifest3.txt" || fail "results of another manifest: exits $rc2 $rc3: $(cat "$tmp/manifest3.txt")"
 
 # Command lines that make no sense: exit 2.
 set +e
@@ -62,7 +79,9 @@ set -e
 grep -q "has 4 runs (0..3)" "$tmp/past.txt" || fail "--index past the end: $(cat "$tmp/past.txt")"
 # SLURM_ARRAY_TASK_ID selects the line when no option does.
 SLURM_ARRAY_TASK_ID=1 "$afb" run --manifest "$tmp/stress.jsonl" --out "$tmp/slurm-env" > /dev/null
-[ "$(ls "$tmp/slurm-env")" = "run-000001.json" ] || fail "SLURM_ARRAY_TASK_ID=1 wrote $(ls "$tmp/slurm-env")"
+[ "$(cd "$tmp/slurm-env" && ls run-*)" = "run-000001.json" ] || fail "SLURM_ARRAY_TASK_ID=1 wrote $(ls "$tmp/slurm-env")"
+# Beside the results, the plan they name: the merge needs no manifest.
+[ "$(cd "$tmp/slurm-env" && ls plan-*.json | wc -l)" -eq 1 ] || fail "afb run left no plan file beside its result"
 
 # --- chart: 1 figure x 2 methods x 2 repeats in two shards, on a copy of the content ---------------------------
 mkdir -p "$tmp/content"
@@ -122,6 +141,69 @@ grep -q '"precision":"double"' "$tmp/double.jsonl" || fail "afb plan --precision
 "$afb" run --manifest "$tmp/double.jsonl" --index 0 --out "$tmp/double-res" > /dev/null
 "$afb" merge "$tmp/double-res" --out "$tmp/double-merged" > "$tmp/double.txt"
 grep -q "Bullet 3.[0-9]* (double)" "$tmp/double.txt" || fail "the double plan was not merged by afb-double"
+
+# --- golden compare: four goldens in two shards, one perturbed so that it fails, one not a golden file ----------
+mkdir -p "$tmp/gcontent" "$tmp/golden"
+cp -r af def models "$tmp/gcontent/"
+"$afb" golden record --base "$tmp/gcontent" chain --out "$tmp/golden/chain.json" --seconds 1 > /dev/null
+"$afb" golden record --base "$tmp/gcontent" chain --out "$tmp/golden/high.json" --seconds 1 --height 2 > /dev/null
+# The fifth joint's recorded x put at 0.5 m: the chain does not hang there.
+awk '/"pose": \[/ { pose = 1 }
+  { line = $0 }
+  pose && prev ~ /"position": \[/ && ++n == 5 { sub(/-?[0-9][0-9.e+-]*/, "0.5", line) }
+  { print line; prev = $0 }' "$tmp/golden/chain.json" > "$tmp/golden/moved.json"
+cmp -s "$tmp/golden/chain.json" "$tmp/golden/moved.json" && fail "the perturbed golden equals its original"
+echo '{}' > "$tmp/golden/broken.json"
+goldens=("$tmp/golden/chain.json" "$tmp/golden/moved.json" "$tmp/golden/broken.json" "$tmp/golden/high.json")
+set +e
+"$afb" golden compare --exact --junit "$tmp/golden-one.xml" --report "$tmp/golden-one" "${goldens[@]}" \
+  > "$tmp/golden-one.txt" 2> "$tmp/golden-one.err"
+rc_one=$?
+set -e
+"$afb" plan golden compare --exact --junit "$tmp/golden-merged.xml" --report "$tmp/golden-merged" "${goldens[@]}" \
+  --manifest "$tmp/golden.jsonl" 2> /dev/null
+[ "$(grep -c . "$tmp/golden.jsonl")" -eq 4 ] || fail "afb plan golden compare: expected 4 lines"
+"$afb" run --manifest "$tmp/golden.jsonl" --shard 1/2 --out "$tmp/golden-res" > /dev/null
+# A missing golden is named like any missing run.
+set +e
+"$afb" merge "$tmp/golden-res" 2> "$tmp/golden-missing.txt" > /dev/null
+rc=$?
+set -e
+[ $rc -eq 1 ] && grep -q "2 of 4 results missing in .*: 0, 2$" "$tmp/golden-missing.txt" ||
+  fail "missing goldens not named: exit $rc: $(cat "$tmp/golden-missing.txt")"
+"$afb" run --manifest "$tmp/golden.jsonl" --shard 0/2 --threads 2 --out "$tmp/golden-res" > /dev/null
+set +e
+"$afb" merge "$tmp/golden-res" > "$tmp/golden-merged.txt" 2> "$tmp/golden-merged.err"
+rc_merged=$?
+set -e
+[ $rc_one -eq 1 ] && [ $rc_merged -eq 1 ] || fail "a failing golden: compare exit $rc_one, merge exit $rc_merged"
+grep -q "^FAIL .*moved.json" "$tmp/golden-merged.txt" || fail "the merge did not report moved.json failing"
+grep -q "^ok   .*high.json" "$tmp/golden-merged.txt" || fail "the merge did not report high.json passing"
+# The JUnit file equal but for its time attributes; the summary and the failing pose's picture byte for byte; the
+# lines on stdout and stderr equal but for where the reports went.
+diff <(sed -E 's/ time="[0-9.]+"//' "$tmp/golden-one.xml") <(sed -E 's/ time="[0-9.]+"//' "$tmp/golden-merged.xml") ||
+  fail "the merged JUnit file differs (timing aside)"
+cmp "$tmp/golden-one/summary.md" "$tmp/golden-merged/summary.md" || fail "the merged summary.md differs"
+[ "$(cd "$tmp/golden-merged" && ls)" = "$(printf 'moved.png\nsummary.md')" ] ||
+  fail "the merged report holds $(ls "$tmp/golden-merged")"
+cmp "$tmp/golden-one/moved.png" "$tmp/golden-merged/moved.png" || fail "the merged picture differs"
+diff <(grep -v "^afb golden compare: " "$tmp/golden-one.txt") <(grep -v "^afb golden compare: " "$tmp/golden-merged.txt") ||
+  fail "the merge's lines differ from compare's"
+diff "$tmp/golden-one.err" "$tmp/golden-merged.err" || fail "the merge's errors differ from compare's"
+# With --out, the reports go there: OUT/junit.xml and OUT/summary.md.
+set +e
+"$afb" merge "$tmp/golden-res" --out "$tmp/golden-out" > /dev/null 2>&1
+set -e
+cmp "$tmp/golden-merged.xml" "$tmp/golden-out/junit.xml" && cmp "$tmp/golden-one/moved.png" "$tmp/golden-out/moved.png" ||
+  fail "afb merge --out did not put the golden reports in its folder"
+# The golden file is among a line's inputs: one changed since planning is refused before it runs.
+echo " " >> "$tmp/golden/high.json"
+set +e
+"$afb" run --manifest "$tmp/golden.jsonl" --index 3 --out "$tmp/x" 2> "$tmp/golden-changed.txt"
+rc=$?
+set -e
+[ $rc -eq 1 ] && grep -q "high.json: error: input changed since planning" "$tmp/golden-changed.txt" ||
+  fail "a golden changed since planning: exit $rc: $(cat "$tmp/golden-changed.txt")"
 
 # --- GNU parallel: the recipe of docs/cluster.md, with a joblog -------------------------------------------------
 if command -v parallel > /dev/null; then

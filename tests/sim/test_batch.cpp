@@ -139,10 +139,58 @@ TEST_CASE("result files are written atomically and read back by index") {
     std::vector<std::string> errors;
     const auto results = sim::readResults(dir, errors);
     REQUIRE(results.size() == 1);
-    CHECK(results.at(3).result.at("v") == 1);
-    CHECK(results.at(3).line.run.at("yaw") == 3);
+    const sim::RunResult& r = results.at(3);
+    CHECK(json::parse(r.result).at("v") == 1);
+    CHECK(r.index == 3);
+    CHECK(r.runs == 4);
+    CHECK(r.build == "build X");
+    // The header names the line by hashes: the plan's (its head), the planned and the found input sets'.
+    CHECK(r.plan ==
+          sim::fnv1a(R"("runs":4,"command":"stress","build":"build X","precision":"float","plan":{"yaws":4})"));
+    CHECK(r.inputs == sim::fnv1a("{}"));
+    CHECK(r.inputsSeen == r.inputs);
     REQUIRE(errors.size() == 1);
     CHECK(errors[0].find("run-000001.json: error: holds the result of index 3") != std::string::npos);
     // Writing into a folder that does not exist fails with a message and leaves nothing.
     CHECK_FALSE(sim::writeAtomically(dir / "no" / "run-000000.json", "x").empty());
+}
+
+TEST_CASE("a manifest line is named by the hash of its text, its plan by a plan file") {
+    const auto dir = scratch("hashes");
+    {
+        std::ofstream out(dir / "m.jsonl");
+        sim::PlanLines lines;
+        lines.plan = json{{"yaws", 2}};
+        lines.inputSets.push_back(json{{"af/a.af", "0123"}});
+        lines.runs.emplace_back(0, json{{"yaw", 0}});
+        lines.runs.emplace_back(0, json{{"yaw", 1}});
+        sim::writeManifest(out, "stress", "build X", "float", lines);
+    }
+    std::ifstream in(dir / "m.jsonl");
+    std::vector<std::string> texts;
+    for (std::string line; std::getline(in, line);) texts.push_back(line);
+    REQUIRE(texts.size() == 2);
+    std::string error;
+    const auto m = sim::readManifest(
+        dir / "m.jsonl", [](std::size_t i) { return i == 1; }, error, true);
+    REQUIRE(m);
+    REQUIRE(m->lineHashes.size() == 2);
+    CHECK(m->lineHashes[0] == sim::fnv1a(texts[0]));
+    CHECK(m->lineHashes[1] == sim::fnv1a(texts[1]));
+    REQUIRE(m->lines.size() == 1);
+    CHECK(m->lines[0].lineHash == m->lineHashes[1]);
+    // The plan file holds the head every line shares, and reads back as the same plan.
+    const sim::PlannedRun& line = m->lines[0];
+    const std::uint64_t hash = sim::planHash(line);
+    CHECK(texts[0].find(sim::manifestHead(2, "stress", "build X", "float", json{{"yaws", 2}})) != std::string::npos);
+    REQUIRE(sim::writeAtomically(sim::planFilePath(dir, hash), sim::planFileText(line)).empty());
+    const auto plan = sim::readPlanFile(sim::planFilePath(dir, hash), hash, error);
+    REQUIRE(plan);
+    CHECK(plan->plan == line.plan);
+    CHECK(plan->build == "build X");
+    // A plan file whose text was changed is not the plan it is named after.
+    std::ofstream(sim::planFilePath(dir, hash))
+        << R"({"runs":2,"command":"stress","build":"build Y","precision":"float","plan":{"yaws":2}})";
+    CHECK_FALSE(sim::readPlanFile(sim::planFilePath(dir, hash), hash, error));
+    CHECK(error.find("not the plan") != std::string::npos);
 }
