@@ -24,7 +24,10 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
 
     void processCollision(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1,
                           const btDispatcherInfo& info, btManifoldResult* out) override {
-        if (m_manifold != nullptr && m_manifold->getNumContacts() == 0 && apart(w0, w1)) return;
+        if (m_manifold != nullptr && m_manifold->getNumContacts() == 0) {
+            if (stillApart(w0, w1) || apart(w0, w1)) return;
+        }
+        m_spare = -1; // the pair may touch: the next step tests it afresh
         m_inner->processCollision(w0, w1, info, out);
         m_manifold = out->getPersistentManifold();
     }
@@ -51,7 +54,48 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
         const btVector3 far0 = t0(shape0->localGetSupportingVertex(axis * t0.getBasis()));
         const btVector3 near1 = t1(shape1->localGetSupportingVertex(-axis * t1.getBasis()));
         const btScalar gap = axis.dot(near1 - far0);
-        return gap > m_manifold->getContactBreakingThreshold() + kSafetyM;
+        m_spare = gap - (m_manifold->getContactBreakingThreshold() + kSafetyM);
+        if (!(m_spare > 0)) {
+            m_spare = -1;
+            return false;
+        }
+        // Kept to bound the motion since this test (stillApart).
+        m_axis = axis;
+        m_at0 = t0;
+        m_at1 = t1;
+        m_reach0 = reach(*shape0);
+        m_reach1 = reach(*shape1);
+        return true;
+    }
+
+    // Whether the gap found by the last apart() along its axis is still wider than the threshold, from how far the
+    // bodies have moved since, without a support point. Along a fixed axis a, a point p of a shape (local, |p| ≤
+    // the shape's reach r) moves from o + R p to o' + R' p: by a·(o' − o) + a·((R' − R) p), the second term at
+    // most ‖R' − R‖ r (the Frobenius norm bounds the spectral one). So the gap shrinks by at most
+    // a·(Δo₀ − Δo₁) + ‖ΔR₀‖ r₀ + ‖ΔR₁‖ r₁: a pair falling or turning together keeps its gap.
+    bool stillApart(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1) const {
+        if (!(m_spare > 0)) return false;
+        const btTransform& t0 = w0->getWorldTransform();
+        const btTransform& t1 = w1->getWorldTransform();
+        const btScalar closing =
+            m_axis.dot((t0.getOrigin() - m_at0.getOrigin()) - (t1.getOrigin() - m_at1.getOrigin()));
+        const btScalar shrink = closing + rotationNorm(t0.getBasis(), m_at0.getBasis()) * m_reach0 +
+                                rotationNorm(t1.getBasis(), m_at1.getBasis()) * m_reach1;
+        return shrink < m_spare; // the 1 mm of kSafetyM in m_spare covers the rounding of the bound
+    }
+
+    static btScalar rotationNorm(const btMatrix3x3& a, const btMatrix3x3& b) {
+        btScalar sum = 0;
+        for (int i = 0; i < 3; ++i) sum += (a[i] - b[i]).length2();
+        return btSqrt(sum);
+    }
+
+    // The farthest any point of the shape (its margin included) lies from its own origin, metres.
+    static btScalar reach(const btConvexShape& shape) {
+        btVector3 centre;
+        btScalar radius;
+        shape.getBoundingSphere(centre, radius);
+        return centre.length() + radius;
     }
 
     // Rounding allowance on the gap, metres.
@@ -59,6 +103,12 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
 
     btCollisionAlgorithm* m_inner;
     const btPersistentManifold* m_manifold = nullptr; // the inner algorithm's, once it has run
+    // The last apart() that held: by how much its gap passed the threshold (negative: none holds), along which
+    // axis, at which transforms, and the shapes' reaches (mutable: the test is a cache of a const question).
+    mutable btScalar m_spare = -1;
+    mutable btVector3 m_axis;
+    mutable btTransform m_at0, m_at1;
+    mutable btScalar m_reach0 = 0, m_reach1 = 0;
 };
 
 // Constant once made, so one object serves every world: the algorithm behind the test is `inner`'s, or, without
