@@ -27,7 +27,7 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
         if (m_manifold != nullptr && m_manifold->getNumContacts() == 0) {
             if (stillApart(w0, w1) || apart(w0, w1)) return;
         }
-        m_spare = -1; // the pair may touch: the next step tests it afresh
+        m_gap = -1; // the pair may touch: the next step tests it afresh
         m_inner->processCollision(w0, w1, info, out);
         m_manifold = out->getPersistentManifold();
     }
@@ -54,11 +54,12 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
         const btVector3 far0 = t0(shape0->localGetSupportingVertex(axis * t0.getBasis()));
         const btVector3 near1 = t1(shape1->localGetSupportingVertex(-axis * t1.getBasis()));
         const btScalar gap = axis.dot(near1 - far0);
-        m_spare = gap - (m_manifold->getContactBreakingThreshold() + kSafetyM);
-        if (!(m_spare > 0)) {
-            m_spare = -1;
+        if (!(gap > m_manifold->getContactBreakingThreshold() + kSafetyM)) {
+            m_gap = -1;
             return false;
         }
+        m_gap = gap;
+        m_object0 = w0->getCollisionObject();
         // Kept to bound the motion since this test (stillApart).
         m_axis = axis;
         m_at0 = t0;
@@ -73,15 +74,17 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
     // the shape's reach r) moves from o + R p to o' + R' p: by a·(o' − o) + a·((R' − R) p), the second term at
     // most ‖R' − R‖ r (the Frobenius norm bounds the spectral one). So the gap shrinks by at most
     // a·(Δo₀ − Δo₁) + ‖ΔR₀‖ r₀ + ‖ΔR₁‖ r₁: a pair falling or turning together keeps its gap.
+    // The threshold is the manifold's now: speculative contacts widen it with the bodies' speeds.
     bool stillApart(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1) const {
-        if (!(m_spare > 0)) return false;
+        if (!(m_gap > 0) || w0->getCollisionObject() != m_object0) return false;
         const btTransform& t0 = w0->getWorldTransform();
         const btTransform& t1 = w1->getWorldTransform();
         const btScalar closing =
             m_axis.dot((t0.getOrigin() - m_at0.getOrigin()) - (t1.getOrigin() - m_at1.getOrigin()));
         const btScalar shrink = closing + rotationNorm(t0.getBasis(), m_at0.getBasis()) * m_reach0 +
                                 rotationNorm(t1.getBasis(), m_at1.getBasis()) * m_reach1;
-        return shrink < m_spare; // the 1 mm of kSafetyM in m_spare covers the rounding of the bound
+        // The 1 mm of kSafetyM covers the rounding of the bound too.
+        return m_gap - shrink > m_manifold->getContactBreakingThreshold() + kSafetyM;
     }
 
     static btScalar rotationNorm(const btMatrix3x3& a, const btMatrix3x3& b) {
@@ -103,9 +106,10 @@ class SeparatedPairAlgorithm : public btCollisionAlgorithm {
 
     btCollisionAlgorithm* m_inner;
     const btPersistentManifold* m_manifold = nullptr; // the inner algorithm's, once it has run
-    // The last apart() that held: by how much its gap passed the threshold (negative: none holds), along which
-    // axis, at which transforms, and the shapes' reaches (mutable: the test is a cache of a const question).
-    mutable btScalar m_spare = -1;
+    // The last apart() that held: its gap (negative: none holds), along which axis, at which transforms, and the
+    // shapes' reaches (mutable: the test is a cache of a const question).
+    mutable btScalar m_gap = -1;
+    mutable const btCollisionObject* m_object0 = nullptr;
     mutable btVector3 m_axis;
     mutable btTransform m_at0, m_at1;
     mutable btScalar m_reach0 = 0, m_reach1 = 0;
@@ -124,7 +128,9 @@ struct CreateSeparatedPair : btCollisionAlgorithmCreateFunc {
                   : dispatcher->getCollisionConfiguration()->getCollisionAlgorithmCreateFunc(
                         w0->getCollisionShape()->getShapeType(), w1->getCollisionShape()->getShapeType());
         btCollisionAlgorithm* wrapped = create->CreateCollisionAlgorithm(ci, w0, w1);
-        void* memory = dispatcher->allocateCollisionAlgorithm(sizeof(SeparatedPairAlgorithm));
+        // Not from the dispatcher's pool: its elements are sized for Bullet's own algorithms, and this one (which
+        // keeps two transforms) may be larger. The dispatcher frees what its pool did not hand out with btAlignedFree.
+        void* memory = btAlignedAlloc(sizeof(SeparatedPairAlgorithm), 16);
         return new (memory) SeparatedPairAlgorithm(ci, wrapped);
     }
     btCollisionAlgorithmCreateFunc* const inner;
