@@ -219,7 +219,7 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
     for (const char* side : {"l", "r"}) {
         const std::string p = side;
         animated[static_cast<std::size_t>(sk.index(p + "_upperarm"))] = QALL;
-        animated[static_cast<std::size_t>(sk.index(p + "_thigh"))] = QY;
+        animated[static_cast<std::size_t>(sk.index(p + "_thigh"))] = QALL;
         animated[static_cast<std::size_t>(sk.index(p + "_shin"))] = QY;
         animated[static_cast<std::size_t>(sk.index(p + "_foot"))] = QY;
     }
@@ -233,17 +233,22 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
             const std::string p = side;
             const double sy = p == "l" ? 1 : -1;
             const double ph = p == "l" ? phase : phase + kPi;
+            const double s45 = std::sin(45 * kDeg);
             // Negative angles about +Y swing a limb forward (-Z towards +X).
             const double thigh = -25 * std::sin(ph);
             const double knee = 5 + 45 * std::pow(std::max(0.0, std::cos(ph)), 2);
-            pose.q[static_cast<std::size_t>(sk.index(p + "_thigh"))] = aa(thigh, Vector3d::UnitY());
+            // The hip is universal too: the thigh swings to where the turn about Y points it, without twist.
+            const Vector3d thighRest = Vector3d(0, sy * 1, -17).normalized();
+            pose.q[static_cast<std::size_t>(sk.index(p + "_thigh"))] =
+                Quaterniond::FromTwoVectors(thighRest, aa(thigh, Vector3d::UnitY()) * thighRest);
             pose.q[static_cast<std::size_t>(sk.index(p + "_shin"))] = aa(knee, Vector3d::UnitY());
             pose.q[static_cast<std::size_t>(sk.index(p + "_foot"))] = aa(-0.6 * (thigh + knee), Vector3d::UnitY());
-            // Arms: lowered from the 45-degree rest to about 80 degrees, swinging against the legs.
-            const Quaterniond lower = aa(-sy * 35, Vector3d::UnitX());
-            pose.q[static_cast<std::size_t>(sk.index(p + "_upperarm"))] =
-                aa(20 * std::sin(ph), Vector3d::UnitY()) * lower;
-            const double s45 = std::sin(45 * kDeg);
+            // Arms: lowered from the 45-degree rest to about 80 degrees, swinging against the legs. The shoulder
+            // is a universal joint, which locks the upper arm's turn about its own bone, so the arm is brought to
+            // where the two turns point it by the shortest arc from its rest direction (a swing without twist).
+            const Vector3d rest(0, sy * s45, -s45);
+            const Vector3d aim = aa(20 * std::sin(ph), Vector3d::UnitY()) * (aa(-sy * 35, Vector3d::UnitX()) * rest);
+            pose.q[static_cast<std::size_t>(sk.index(p + "_upperarm"))] = Quaterniond::FromTwoVectors(rest, aim);
             pose.q[static_cast<std::size_t>(sk.index(p + "_forearm"))] = aa(20, Vector3d(0, -s45, -sy * s45));
         }
         frames.push_back(pose);
