@@ -54,9 +54,10 @@ void RagdollSolver::Direct::join(FreeRow& fr, const btAlignedObjectArray<btSolve
     auto link = [&](int j) {
         if (block.seen[static_cast<std::size_t>(j)] == k) return;
         block.seen[static_cast<std::size_t>(j)] = k;
-        const FreeRow& other = *block.rows[static_cast<std::size_t>(j)];
-        mine.emplace_back(j, couplingOf(fr, other));
-        block.links[static_cast<std::size_t>(j)].emplace_back(k, couplingOf(other, fr));
+        // W is symmetric (J_r H⁻¹ J_sᵀ with H symmetric): one product serves both directions.
+        const double w = couplingOf(fr, *block.rows[static_cast<std::size_t>(j)]);
+        mine.emplace_back(j, w);
+        block.links[static_cast<std::size_t>(j)].emplace_back(k, w);
     };
     for (int t = 0; t < 2; ++t)
         if (fr.group[t] >= 0)
