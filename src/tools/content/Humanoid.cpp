@@ -296,14 +296,20 @@ std::string humanoidIdle(const Skeleton& sk, const std::vector<Mesh>& meshes) {
             const double sy = p == "l" ? 1 : -1;
             // The leg the weight leaves bends its knee a little; the foot turns back flat on the ground.
             const double knee = 4 + 3 * (1 - sy * sway);
-            const Quaterniond thigh = aa(-0.5 * knee, Vector3d::UnitY()) * aa(0.5 * sy, Vector3d::UnitX());
+            // Shoulders and hips are universal joints (no twist about the bone): limbs swing by the shortest arc.
+            const Vector3d thighRest = Vector3d(0, sy * 1, -17).normalized();
+            const Quaterniond thigh =
+                Quaterniond::FromTwoVectors(thighRest, aa(-0.5 * knee, Vector3d::UnitY()) *
+                                                           (aa(0.5 * sy, Vector3d::UnitX()) * thighRest));
             const Quaterniond shin = aa(knee, Vector3d::UnitY());
             pose.q[at(p + "_thigh")] = thigh;
             pose.q[at(p + "_shin")] = shin;
             pose.q[at(p + "_foot")] = (root * thigh * shin).inverse();
-            const Quaterniond lower = aa(-sy * (38 - 2 * breath), Vector3d::UnitX());
-            pose.q[at(p + "_upperarm")] = aa(-3 * breath - 4, Vector3d::UnitY()) * lower;
             const double s45 = std::sin(45 * kDeg);
+            const Vector3d armRest(0, sy * s45, -s45);
+            const Quaterniond lower = aa(-sy * (38 - 2 * breath), Vector3d::UnitX());
+            pose.q[at(p + "_upperarm")] =
+                Quaterniond::FromTwoVectors(armRest, aa(-3 * breath - 4, Vector3d::UnitY()) * (lower * armRest));
             pose.q[at(p + "_forearm")] = aa(12 + 3 * breath, Vector3d(0, -s45, -sy * s45));
         }
         frames.push_back(pose);
