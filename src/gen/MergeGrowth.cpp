@@ -22,22 +22,26 @@ double fittedVolume(const Rig& rig, int head, const std::vector<int>& childHeads
     return trial.volume;
 }
 
+// The joint that names a body: its head's, or for the base body its joint with the most vertices.
+const RigJoint& namingJoint(const Rig& rig, const BodyFit& body) {
+    return rig.joints[static_cast<std::size_t>(body.head > 0 ? body.head : body.mainJoint)];
+}
+
 // The report of a bone left out of `body`, before its vertices are counted in (addPoint).
 StrayVertices leftOutReport(const Rig& rig, const BodyFit& body, int joint, double growth) {
     StrayVertices r;
     r.joint = rig.joints[static_cast<std::size_t>(joint)].name;
-    r.body = rig.joints[static_cast<std::size_t>(body.head > 0 ? body.head : body.mainJoint)].name;
+    r.body = namingJoint(rig, body).name;
     r.growth = growth;
     r.nearestM = INFINITY;
     return r;
 }
 
-// One more vertex of a left-out branch: counted, and its distance from the body's joint.
+// One more vertex of a left-out branch: counted, and its distance from the joint that names the body.
 void addPoint(StrayVertices& r, const Rig& rig, const BodyFit& body, const Member& m) {
-    const double d = (rig.surfaces[m.surface].vertices[m.vertex].position -
-                      rig.joints[static_cast<std::size_t>(body.head)].bind.position)
-                         .norm() *
-                     kMetresPerDoomUnit;
+    const double d =
+        (rig.surfaces[m.surface].vertices[m.vertex].position - namingJoint(rig, body).bind.position).norm() *
+        kMetresPerDoomUnit;
     ++r.vertices;
     ++r.boneVertices;
     r.nearestM = std::min(r.nearestM, d);
