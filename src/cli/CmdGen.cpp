@@ -67,11 +67,13 @@ nlohmann::json strayJson(const std::vector<gen::StrayVertices>& stray) {
     for (const auto& s : stray)
         out.push_back({{"joint", s.joint},
                        {"surface", s.surface},
+                       {"body", s.body},
                        {"vertices", s.vertices},
                        {"nearestM", s.nearestM},
                        {"farthestM", s.farthestM},
                        {"medianM", s.medianM},
-                       {"limitM", s.limitM}});
+                       {"limitM", s.limitM},
+                       {"growth", s.growth}});
     return out;
 }
 

@@ -130,9 +130,19 @@ void fitShape(BodyFit& body, const std::vector<std::string>& shapes) {
 
 } // namespace
 
-std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
-                               const std::vector<bool>& skipped, const std::vector<std::vector<Eigen::Vector3d>>& owned,
-                               const VertexMask& stray);
+// What fitting a grouping needs, per joint: its group's head, whether it is skipped, the vertices it owns, whether it
+// was merged into its body for its size; and the vertices left out before fitting.
+struct FitInput {
+    const std::vector<int>& group;
+    const std::vector<bool>& skipped;
+    const std::vector<std::vector<Eigen::Vector3d>>& owned;
+    const std::vector<bool>& mergedSmall;
+    const VertexMask& stray;
+};
+
+// Fits one body per group; `stray` and `report` take the vertices maxMergeGrowth leaves out.
+std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitInput& in, VertexMask& stray,
+                               std::vector<StrayVertices>& report);
 
 // The model's height as fitting sees it: modelHeight without the stray vertices.
 double fittedHeight(const Rig& rig, const VertexMask& stray) {
@@ -179,7 +189,8 @@ struct Grouping {
     const Rig& rig;
     const Ownership& own;
     std::vector<int> group;
-    std::vector<bool> kept; // per joint, matched by the rules' keep list: heads its own body whatever its size
+    std::vector<bool> kept;        // per joint, matched by the rules' keep list: heads its own body whatever its size
+    std::vector<bool> mergedSmall; // per joint, merged into an ancestor's body for its size (maxMergeGrowth)
 
     int joints() const { return static_cast<int>(group.size()); }
     int parentOf(int j) const { return rig.joints[static_cast<std::size_t>(j)].parent; }
@@ -194,6 +205,12 @@ struct Grouping {
     void mergeInto(int from, int into) {
         for (int& g : group)
             if (g == from) g = into;
+    }
+    // The same for a group too small for a body of its own: its joints are marked.
+    void mergeSmall(int from, int into) {
+        for (std::size_t j = 0; j < group.size(); ++j)
+            if (group[j] == from) mergedSmall[j] = true;
+        mergeInto(from, into);
     }
     // Head to the farthest joint below it in its group.
     double boneLength(int head) const {
@@ -217,7 +234,8 @@ Grouping groupJoints(const Rig& rig, const GenRules& rules, const Ownership& own
     const auto mergeRe = compile(rules.merge);
     const auto keepRe = compile(rules.keep);
     const int n = static_cast<int>(rig.joints.size());
-    Grouping g{rig, own, std::vector<int>(static_cast<std::size_t>(n)), std::vector<bool>(static_cast<std::size_t>(n))};
+    Grouping g{rig, own, std::vector<int>(static_cast<std::size_t>(n)), std::vector<bool>(static_cast<std::size_t>(n)),
+               std::vector<bool>(static_cast<std::size_t>(n))};
     for (int j = 0; j < n; ++j) {
         const std::string& name = rig.joints[static_cast<std::size_t>(j)].name;
         const int parent = g.parentOf(j);
@@ -235,7 +253,7 @@ Grouping groupJoints(const Rig& rig, const GenRules& rules, const Ownership& own
         const auto pts = g.pointsOf(j);
         if (static_cast<int>(pts.size()) < minVertices ||
             std::max(extentOf(pts), g.boneLength(j)) < rules.minBodyFraction * height)
-            g.mergeInto(j, g.group[static_cast<std::size_t>(g.parentOf(j))]);
+            g.mergeSmall(j, g.group[static_cast<std::size_t>(g.parentOf(j))]);
     }
     while (static_cast<int>(g.pointsOf(0).size()) < std::max(minVertices, 1)) {
         int bestChild = -1;
@@ -280,28 +298,112 @@ int smallestBody(const std::vector<BodyFit>& bodies, const std::vector<bool>& ke
 
 } // namespace
 
-std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray) {
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, VertexMask& stray,
+                               std::vector<StrayVertices>& report) {
     const Ownership own = ownVertices(rig, compile(rules.skip), stray);
     Grouping grouping = groupJoints(rig, rules, own, fittedHeight(rig, stray));
     // Fit, then merge the body of least relative volume into its parent while that ratio is under minVolumeRatio
     // (the figure layer warns from 10:1 mass ratios across a joint; one density makes mass ratios volume ratios).
     for (;;) {
-        std::vector<BodyFit> bodies = fitGroups(rig, rules, grouping.group, own.skipped, own.owned, stray);
+        VertexMask leftOut = stray;
+        std::vector<StrayVertices> grown;
+        std::vector<BodyFit> bodies =
+            fitGroups(rig, rules, {grouping.group, own.skipped, own.owned, grouping.mergedSmall, stray}, leftOut,
+                      grown);
         const int worst = smallestBody(bodies, grouping.kept, rules.minVolumeRatio);
-        if (worst < 0) return bodies;
+        if (worst < 0) {
+            stray = std::move(leftOut);
+            report.insert(report.end(), grown.begin(), grown.end());
+            return bodies;
+        }
         const BodyFit& b = bodies[static_cast<std::size_t>(worst)];
-        grouping.mergeInto(b.head, bodies[static_cast<std::size_t>(b.parentBody)].head);
+        grouping.mergeSmall(b.head, bodies[static_cast<std::size_t>(b.parentBody)].head);
     }
 }
 
-std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
-                               const std::vector<bool>& skipped, const std::vector<std::vector<Eigen::Vector3d>>& owned,
-                               const VertexMask& stray) {
+BoneAxis boneAxis(const Rig& rig, int head, const std::vector<int>& childHeads, const std::vector<int>& joints) {
+    BoneAxis axis;
+    axis.head = rig.joints[static_cast<std::size_t>(head)].bind.position;
+    if (head == 0) return axis;
+    if (childHeads.size() == 1) {
+        axis.tail = rig.joints[static_cast<std::size_t>(childHeads[0])].bind.position;
+        axis.toTail = true;
+    } else if (childHeads.empty()) {
+        double far = 0;
+        for (int j : joints) {
+            const Eigen::Vector3d p = rig.joints[static_cast<std::size_t>(j)].bind.position;
+            if ((p - axis.head).norm() > far) {
+                far = (p - axis.head).norm();
+                axis.tail = p;
+            }
+        }
+    }
+    return axis;
+}
+
+// Frames: Z along the bone (toward the one child body, else the farthest joint of the group), X and Y the principal
+// axes of the vertices across it; without a bone, the principal axes alone.
+void fitFrame(BodyFit& b, const BoneAxis& axis, double height, const std::vector<std::string>& shapes) {
+    const Eigen::Vector3d& head = axis.head;
+    const Eigen::Matrix3d pca = principalAxes(b.points);
+    Eigen::Vector3d d = pca.col(0);
+    if (axis.tail && (*axis.tail - head).norm() > 1e-3 * height) d = (*axis.tail - head).normalized();
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : b.points) mean += p;
+    mean /= static_cast<double>(b.points.size());
+    if (!axis.tail && d.dot(mean - head) < 0) d = -d;
+    const Eigen::Vector3d x = perpendicular(d, pca.col(0).cross(d).norm() > 0.3 ? pca.col(0) : pca.col(1));
+    b.frame.col(0) = x;
+    b.frame.col(1) = d.cross(x);
+    b.frame.col(2) = d;
+    // Bounds in that frame: the vertices, and along the bone from the head to the child's head.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const auto& p : b.points) {
+        const Eigen::Vector3d q = b.frame.transpose() * (p - head);
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+    }
+    if (axis.tail && axis.toTail) {
+        lo.z() = std::min(lo.z(), 0.0);
+        hi.z() = std::max(hi.z(), d.dot(*axis.tail - head));
+    }
+    Eigen::Vector3d half = (hi - lo) / 2;
+    const double thickness = std::max(0.02 * height, 0.15 * 2 * half.maxCoeff());
+    for (int k = 0; k < 3; ++k) half(k) = std::max(half(k), thickness / 2);
+    b.centre = head + b.frame * ((lo + hi) / 2);
+    b.halfExtents = half;
+    fitShape(b, shapes);
+    b.direction = (b.centre - head).norm() > 1e-6 * height ? Eigen::Vector3d((b.centre - head).normalized()) : d;
+}
+
+namespace {
+
+// A kept bone without vertices (a head modelled apart, as Doom's def_head): a cube a tenth of the model's height,
+// beyond the joint along the bone from its parent, as eight corner points.
+void addCubePoints(const Rig& rig, BodyFit& b, double height) {
+    const Eigen::Vector3d head = rig.joints[static_cast<std::size_t>(b.head)].bind.position;
+    Eigen::Vector3d d = Eigen::Vector3d::UnitZ();
+    if (b.parentBody >= 0) {
+        const Eigen::Vector3d from =
+            rig.joints[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)].bind.position;
+        if ((head - from).norm() > 1e-6 * height) d = (head - from).normalized();
+    }
+    const double side = 0.1 * height;
+    b.frame.col(2) = d;
+    b.frame.col(0) = perpendicular(d, Eigen::Vector3d::UnitX());
+    b.frame.col(1) = d.cross(b.frame.col(0));
+    b.centre = head + d * (side / 2);
+    b.halfExtents = Eigen::Vector3d::Constant(side / 2);
+    for (int k = 0; k < 8; ++k)
+        b.points.push_back(b.centre + b.frame * Eigen::Vector3d(k & 1 ? side / 2 : -side / 2,
+                                                                k & 2 ? side / 2 : -side / 2,
+                                                                k & 4 ? side / 2 : -side / 2));
+}
+
+// Bodies in joint order of their heads (the base body first), each with its joints and its parent body.
+std::vector<BodyFit> bodiesOf(const Rig& rig, const std::vector<int>& group, std::map<int, int>& bodyOfHead) {
     const int n = static_cast<int>(rig.joints.size());
-    const double height = fittedHeight(rig, stray);
-    // Bodies in joint order of their heads; the base body first.
     std::vector<BodyFit> bodies;
-    std::map<int, int> bodyOfHead;
     for (int j = 0; j < n; ++j)
         if (group[static_cast<std::size_t>(j)] == j) {
             bodyOfHead[j] = static_cast<int>(bodies.size());
@@ -311,110 +413,73 @@ std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const std:
         }
     for (int j = 0; j < n; ++j)
         bodies[static_cast<std::size_t>(bodyOfHead.at(group[static_cast<std::size_t>(j)]))].joints.push_back(j);
-    // A vertex is fitted by the body whose bones weigh it most together, when they weigh it at least the threshold
-    // (a vertex shared evenly between two bodies bends with both and belongs to neither's shape).
+    for (BodyFit& b : bodies)
+        if (b.head > 0)
+            b.parentBody =
+                bodyOfHead.at(group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)]);
+    return bodies;
+}
+
+// A vertex is fitted by the body whose bones weigh it most together, when they weigh it at least the threshold
+// (a vertex shared evenly between two bodies bends with both and belongs to neither's shape). Per body, its
+// members: each vertex and the body's joint that weighs it most.
+std::vector<std::vector<Member>> assignVertices(const Rig& rig, const GenRules& rules, const std::vector<int>& group,
+                                                const std::vector<bool>& skipped, const std::map<int, int>& bodyOfHead,
+                                                const VertexMask& stray, std::vector<BodyFit>& bodies) {
+    std::vector<std::vector<Member>> members(bodies.size());
+    const auto bodyOf = [&](int joint) { return bodyOfHead.at(group[static_cast<std::size_t>(joint)]); };
     for (std::size_t si = 0; si < rig.surfaces.size(); ++si)
         for (std::size_t vi = 0; vi < rig.surfaces[si].vertices.size(); ++vi) {
             const RigVertex& v = rig.surfaces[si].vertices[vi];
             if (stray[si][vi]) continue;
             std::map<int, double> byBody;
             for (const RigInfluence& in : v.influences)
-                if (!skipped[static_cast<std::size_t>(in.joint)])
-                    byBody[bodyOfHead.at(group[static_cast<std::size_t>(in.joint)])] += in.weight;
+                if (!skipped[static_cast<std::size_t>(in.joint)]) byBody[bodyOf(in.joint)] += in.weight;
             const auto top = std::max_element(byBody.begin(), byBody.end(),
                                               [](const auto& a, const auto& b) { return a.second < b.second; });
-            if (top != byBody.end() && top->second >= rules.weightThreshold)
-                bodies[static_cast<std::size_t>(top->first)].points.push_back(v.position);
+            if (top == byBody.end() || top->second < rules.weightThreshold) continue;
+            const auto body = static_cast<std::size_t>(top->first);
+            int joint = -1;
+            double weight = 0;
+            for (const RigInfluence& in : v.influences)
+                if (!skipped[static_cast<std::size_t>(in.joint)] && bodyOf(in.joint) == top->first &&
+                    in.weight > weight) {
+                    joint = in.joint;
+                    weight = in.weight;
+                }
+            bodies[body].points.push_back(v.position);
+            members[body].push_back({si, vi, joint});
         }
+    return members;
+}
+
+} // namespace
+
+std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitInput& in, VertexMask& stray,
+                               std::vector<StrayVertices>& report) {
+    const double height = fittedHeight(rig, in.stray);
+    std::map<int, int> bodyOfHead;
+    std::vector<BodyFit> bodies = bodiesOf(rig, in.group, bodyOfHead);
+    std::vector<std::vector<Member>> members =
+        assignVertices(rig, rules, in.group, in.skipped, bodyOfHead, in.stray, bodies);
     for (BodyFit& b : bodies) {
         std::size_t most = 0;
         b.mainJoint = b.head;
         for (int j : b.joints)
-            if (owned[static_cast<std::size_t>(j)].size() > most) {
-                most = owned[static_cast<std::size_t>(j)].size();
+            if (in.owned[static_cast<std::size_t>(j)].size() > most) {
+                most = in.owned[static_cast<std::size_t>(j)].size();
                 b.mainJoint = j;
             }
     }
-    for (BodyFit& b : bodies)
-        if (b.head > 0)
-            b.parentBody =
-                bodyOfHead.at(group[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)]);
-
-    // Frames: Z along the bone (toward the one child body, else the farthest joint of the group), X and Y the
-    // principal axes of the vertices across it; without a bone, the principal axes alone.
-    const double minThickness = 0.02 * height;
     for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
         BodyFit& b = bodies[bi];
-        const Eigen::Vector3d head = rig.joints[static_cast<std::size_t>(b.head)].bind.position;
-        std::vector<int> children;
-        for (std::size_t ci = 0; ci < bodies.size(); ++ci)
-            if (bodies[ci].parentBody == static_cast<int>(bi)) children.push_back(static_cast<int>(ci));
-        std::optional<Eigen::Vector3d> tail;
-        if (b.head > 0) {
-            if (children.size() == 1) {
-                tail = rig.joints[static_cast<std::size_t>(bodies[static_cast<std::size_t>(children[0])].head)]
-                           .bind.position;
-            } else if (children.empty()) {
-                double far = 0;
-                for (int j : b.joints) {
-                    const Eigen::Vector3d p = rig.joints[static_cast<std::size_t>(j)].bind.position;
-                    if ((p - head).norm() > far) {
-                        far = (p - head).norm();
-                        tail = p;
-                    }
-                }
-            }
-        }
-        if (b.points.size() < 4) {
-            // A kept bone without vertices (a head modelled apart, as Doom's def_head): a cube a tenth of the
-            // model's height, beyond the joint along the bone from its parent.
-            Eigen::Vector3d d = Eigen::Vector3d::UnitZ();
-            if (b.parentBody >= 0) {
-                const Eigen::Vector3d from =
-                    rig.joints[static_cast<std::size_t>(rig.joints[static_cast<std::size_t>(b.head)].parent)]
-                        .bind.position;
-                if ((head - from).norm() > 1e-6 * height) d = (head - from).normalized();
-            }
-            const double side = 0.1 * height;
-            b.frame.col(2) = d;
-            b.frame.col(0) = perpendicular(d, Eigen::Vector3d::UnitX());
-            b.frame.col(1) = d.cross(b.frame.col(0));
-            b.centre = head + d * (side / 2);
-            b.halfExtents = Eigen::Vector3d::Constant(side / 2);
-            for (int k = 0; k < 8; ++k)
-                b.points.push_back(b.centre + b.frame * Eigen::Vector3d(k & 1 ? side / 2 : -side / 2,
-                                                                        k & 2 ? side / 2 : -side / 2,
-                                                                        k & 4 ? side / 2 : -side / 2));
-        }
-        const Eigen::Matrix3d pca = principalAxes(b.points);
-        Eigen::Vector3d d = pca.col(0);
-        if (tail && (*tail - head).norm() > 1e-3 * height) d = (*tail - head).normalized();
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        for (const auto& p : b.points) mean += p;
-        mean /= static_cast<double>(b.points.size());
-        if (!tail && d.dot(mean - head) < 0) d = -d;
-        const Eigen::Vector3d x = perpendicular(d, pca.col(0).cross(d).norm() > 0.3 ? pca.col(0) : pca.col(1));
-        b.frame.col(0) = x;
-        b.frame.col(1) = d.cross(x);
-        b.frame.col(2) = d;
-        // Bounds in that frame: the vertices, and along the bone from the head to the child's head.
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-        for (const auto& p : b.points) {
-            const Eigen::Vector3d q = b.frame.transpose() * (p - head);
-            lo = lo.cwiseMin(q);
-            hi = hi.cwiseMax(q);
-        }
-        if (tail && b.head > 0 && children.size() == 1) {
-            lo.z() = std::min(lo.z(), 0.0);
-            hi.z() = std::max(hi.z(), d.dot(*tail - head));
-        }
-        Eigen::Vector3d half = (hi - lo) / 2;
-        const double thickness = std::max(minThickness, 0.15 * 2 * half.maxCoeff());
-        for (int k = 0; k < 3; ++k) half(k) = std::max(half(k), thickness / 2);
-        b.centre = head + b.frame * ((lo + hi) / 2);
-        b.halfExtents = half;
-        fitShape(b, rules.shapes);
-        b.direction = (b.centre - head).norm() > 1e-6 * height ? Eigen::Vector3d((b.centre - head).normalized()) : d;
+        std::vector<int> childHeads;
+        for (const BodyFit& c : bodies)
+            if (c.parentBody == static_cast<int>(bi)) childHeads.push_back(c.head);
+        const std::vector<int> joints =
+            limitMergeGrowth(rig, rules, in.mergedSmall, childHeads, height, b, members[bi], stray, report);
+        if (b.points.size() < 4) addCubePoints(rig, b, height);
+        fitFrame(b, boneAxis(rig, b.head, childHeads, joints), height, rules.shapes);
     }
     return bodies;
 }

@@ -1,5 +1,6 @@
 #pragma once
 // Internal to afb gen: grouping bones into bodies and fitting one of Doom's shapes to each group's vertices.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,39 @@ struct BodyFit {
 using VertexMask = std::vector<std::vector<bool>>;
 
 /// Groups the rig's joints into bodies (merge rules, size rules, the base body) and fits a shape to each, to every
-/// vertex but those set in `stray`.
-std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, const VertexMask& stray);
+/// vertex but those set in `stray`. Vertices the maxMergeGrowth rule leaves out are set in `stray` and reported in
+/// `report`.
+std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, VertexMask& stray,
+                               std::vector<StrayVertices>& report);
+
+/// Where a body's frame runs: from its head joint toward `tail` when set (else along the vertices' principal axis).
+struct BoneAxis {
+    Eigen::Vector3d head = Eigen::Vector3d::Zero(); ///< the head joint, model space
+    std::optional<Eigen::Vector3d> tail;            ///< the one child body's head joint, or a leaf's farthest joint
+    bool toTail = false;                            ///< the bounds reach the tail (a body with one child body)
+};
+
+/// The axis of a body with head joint `head` and the child bodies whose head joints are `childHeads`: toward the one
+/// child's head, else (a leaf) toward the farthest of `joints` from the head; none for the base body (head 0).
+BoneAxis boneAxis(const Rig& rig, int head, const std::vector<int>& childHeads, const std::vector<int>& joints);
+
+/// Fits `body`'s frame and shape to its points (at least one) along `axis` (`height`: the model's, for the least
+/// thickness): sets frame, centre, halfExtents, shape, sides, bone length and width, volume and direction.
+void fitFrame(BodyFit& body, const BoneAxis& axis, double height, const std::vector<std::string>& shapes);
+
+/// One vertex a body is fitted to: where it is in the rig, and the body's joint that weighs it most.
+struct Member {
+    std::size_t surface = 0, vertex = 0;
+    int joint = 0;
+};
+
+/// The maxMergeGrowth rule on one body (GenRules::maxMergeGrowth): the vertices of its joints set in `mergedSmall`
+/// (bones merged into it for their size) stay in `body.points` and `members` only while the body fitted to them
+/// stays within the factor of the volume of the body fitted to its other joints' vertices. The others are removed,
+/// set in `stray` and reported one entry per bone. `childHeads` and `height` as for boneAxis and fitFrame. Returns
+/// the body's joints that still count for its axis (all of them but the bones left out).
+std::vector<int> limitMergeGrowth(const Rig& rig, const GenRules& rules, const std::vector<bool>& mergedSmall,
+                                  const std::vector<int>& childHeads, double height, BodyFit& body,
+                                  std::vector<Member>& members, VertexMask& stray, std::vector<StrayVertices>& report);
 
 } // namespace afb::gen::detail

@@ -157,12 +157,31 @@ decl::AfConstraint constraintFor(const Rig& rig, const BodyFit& child, const std
 
 std::string centimetres(double metres) { return std::to_string(static_cast<long>(std::lround(metres * 100))); }
 
+// A volume factor with one decimal.
+std::string growthText(double factor) {
+    const long tenths = std::lround(factor * 10);
+    return std::to_string(tenths / 10) + "." + std::to_string(tenths % 10);
+}
+
 // One warning per bone (or skipped surface) whose vertices no body is fitted to, naming the model as given.
-void reportStray(const std::vector<StrayVertices>& stray, const std::string& model, text::Diagnostics& diagnostics) {
+void reportStray(const std::vector<StrayVertices>& stray, const std::string& model, double maxGrowth,
+                 text::Diagnostics& diagnostics) {
     for (const StrayVertices& s : stray) {
         if (!s.surface.empty()) {
             diagnostics.warning({model, 0, 0}, "surface \"" + s.surface + "\" (" + std::to_string(s.vertices) +
                                                    " vertices) is skipped by the rules: no body is fitted to it");
+            continue;
+        }
+        if (!s.body.empty()) {
+            diagnostics.warning({model, 0, 0},
+                                std::to_string(s.vertices) + " of the " + std::to_string(s.boneVertices) +
+                                    " vertices of bone \"" + s.joint + "\" and the bones hanging from it lie " +
+                                    centimetres(s.nearestM) + "-" + centimetres(s.farthestM) + " cm from joint \"" +
+                                    s.body +
+                                    "\", whose body the bone is merged into for its size: it would make that "
+                                    "body " +
+                                    growthText(s.growth) + " times the volume of its own bones' (at most " +
+                                    growthText(maxGrowth) + "); no body is fitted to them (rules: maxMergeGrowth)");
             continue;
         }
         diagnostics.warning({model, 0, 0},
@@ -287,9 +306,10 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     out.afPose = bindPoseAnim(rig, commandline);
     out.modelOffset = rig.joints[0].bind.position;
 
-    const detail::VertexMask stray = strayVertices(rig, options.rules, out.stray);
-    reportStray(out.stray, options.source.empty() ? options.name : options.source, diagnostics);
-    const std::vector<BodyFit> fits = detail::fitBodies(rig, options.rules, stray);
+    detail::VertexMask stray = strayVertices(rig, options.rules, out.stray);
+    const std::vector<BodyFit> fits = detail::fitBodies(rig, options.rules, stray, out.stray);
+    reportStray(out.stray, options.source.empty() ? options.name : options.source, options.rules.maxMergeGrowth,
+                diagnostics);
     const Eigen::Vector3d forward = forwardOf(rig, options.rules);
     double totalVolume = 0;
     for (const BodyFit& b : fits) totalVolume += b.volume;

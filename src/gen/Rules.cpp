@@ -155,6 +155,10 @@ std::optional<GenRules> parseRules(const std::string& json, const std::string& f
             else if (key == "strayFactor") {
                 r.strayFactor = number(v, key);
                 if (r.strayFactor < 0 || r.strayFactor > 1000) throw RulesError{"\"strayFactor\" must be in [0, 1000]"};
+            } else if (key == "maxMergeGrowth") {
+                r.maxMergeGrowth = number(v, key);
+                if (r.maxMergeGrowth != 0 && !(r.maxMergeGrowth >= 1 && r.maxMergeGrowth <= 1000))
+                    throw RulesError{"\"maxMergeGrowth\" must be 0 (off) or in [1, 1000]"};
             } else if (key == "minVertexFraction") {
                 r.minVertexFraction = number(v, key);
                 if (r.minVertexFraction < 0 || r.minVertexFraction >= 1)

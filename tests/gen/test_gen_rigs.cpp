@@ -1,7 +1,10 @@
 // afb gen on rigs as they come: the units and up axis of an md5mesh (a one unit tall fixture authored in metres),
-// and vertices far from the bone that weighs them (a prop skinned to the head) left out of the bodies.
+// vertices far from the bone that weighs them (a prop skinned to the head) left out of the bodies, and small bones
+// merged into a body only while they do not stretch it (maxMergeGrowth).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "TestSupport.h"
@@ -207,4 +210,132 @@ TEST_CASE("gen: the bundled humanoid has no stray vertices", "[gen]") {
     const auto mask = afb::gen::strayVertices(*rig, afb::gen::defaultRules(), report);
     CHECK(report.empty());
     REQUIRE(mask.size() == rig->surfaces.size());
+}
+
+namespace {
+
+// propRig's pelvis, chest and head without the prop, and a small bone `name` (6 vertices: too few for a body of its
+// own, so it merges into the head's) at `joint` under the head, its vertices a 2-unit cube centred at `cluster`.
+afb::gen::Rig smallBoneRig(const std::string& name, const Eigen::Vector3d& joint, const Eigen::Vector3d& cluster) {
+    afb::gen::Rig rig = propRig();
+    rig.surfaces.pop_back();
+    rig.joints.push_back({name, 3, {Eigen::Matrix3d::Identity(), joint}});
+    afb::gen::RigSurface small{"small", "models/test/small", {}, {}};
+    for (int k = 0; k < 6; ++k) {
+        afb::gen::RigVertex v;
+        v.position = cluster + Eigen::Vector3d(k % 2 ? 1 : -1, k / 2 - 1.0, k % 3 - 1.0);
+        v.influences = {{4, 1.0}};
+        small.vertices.push_back(v);
+    }
+    rig.surfaces.push_back(small);
+    return rig;
+}
+
+const afb::gen::GeneratedBody& bodyOf(const afb::gen::Generated& g, const std::string& joint) {
+    for (const auto& b : g.bodies)
+        if (b.joint == joint) return b;
+    FAIL("no body at " << joint);
+    return g.bodies.front();
+}
+
+} // namespace
+
+// The head's box is 8 × 7 × 10 units (x -4..4, z 64..74); a braid hangs 20 units below its front edge.
+TEST_CASE("gen: a small bone hanging far off a body is left out of it and reported (maxMergeGrowth)", "[gen]") {
+    const afb::gen::Rig rig = smallBoneRig("braid", {10, 0, 50}, {10, 0, 44});
+    afb::text::Diagnostics diags;
+    const auto generated = generate(rig, diags);
+    REQUIRE(generated);
+    INFO(diags.str());
+    CHECK_FALSE(diags.hasErrors());
+    // The bodies are the three boxes again: the braid's bone is in the head's body, its vertices in no body.
+    CHECK(generated->totalMassKg == Approx(kMassWithoutPropKg).epsilon(0.02));
+    const auto& head = bodyOf(*generated, "head");
+    CHECK(head.vertices == 98);
+    CHECK(std::count(head.joints.begin(), head.joints.end(), 4) == 1);
+    REQUIRE(generated->stray.size() == 1);
+    const auto& s = generated->stray[0];
+    CHECK(s.joint == "braid");
+    CHECK(s.body == "head");
+    CHECK(s.vertices == 6);
+    // From the head joint (0, 0, 64) to the braid's vertices: (9, 0, 45) is the nearest, (11, 0, 43) the farthest.
+    CHECK(s.nearestM == Approx(std::hypot(9.0, 19.0) * kMetresPerUnit).margin(1e-9));
+    CHECK(s.farthestM == Approx(std::hypot(11.0, 21.0) * kMetresPerUnit).margin(1e-9));
+    CHECK(s.growth > afb::gen::defaultRules().maxMergeGrowth);
+    CHECK(diags.str().find("6 of the 6 vertices of bone \"braid\"") != std::string::npos);
+    CHECK(diags.str().find("rules: maxMergeGrowth") != std::string::npos);
+
+    // With the rule off, the head's body reaches down over the braid: its box alone would be 560 units³.
+    afb::gen::GenRules off = afb::gen::defaultRules();
+    off.maxMergeGrowth = 0;
+    afb::text::Diagnostics offDiags;
+    const auto stretched = generate(rig, offDiags, off);
+    REQUIRE(stretched);
+    CHECK(stretched->stray.empty());
+    CHECK(bodyOf(*stretched, "head").vertices == 98 + 6);
+    CHECK(bodyOf(*stretched, "head").volumeUnits3 > 3 * 560);
+}
+
+TEST_CASE("gen: a small bone whose vertices lie inside its body's is merged (maxMergeGrowth)", "[gen]") {
+    const afb::gen::Rig rig = smallBoneRig("chin", {0, 0, 66}, {0, 0, 68});
+    afb::text::Diagnostics diags;
+    const auto generated = generate(rig, diags);
+    REQUIRE(generated);
+    INFO(diags.str());
+    CHECK(generated->stray.empty());
+    CHECK(bodyOf(*generated, "head").vertices == 98 + 6);
+    CHECK(generated->totalMassKg == Approx(kMassWithoutPropKg).epsilon(0.02));
+    CHECK(diags.str().find("maxMergeGrowth") == std::string::npos);
+
+    afb::text::Diagnostics ruleDiags;
+    const auto rules = afb::gen::parseRules(R"({"maxMergeGrowth": 3})", "rules.json", ruleDiags);
+    REQUIRE(rules);
+    CHECK(rules->maxMergeGrowth == 3);
+    CHECK_FALSE(afb::gen::parseRules(R"({"maxMergeGrowth": 0.5})", "rules.json", ruleDiags));
+    CHECK(ruleDiags.str().find("rules.json: error: \"maxMergeGrowth\" must be 0 (off) or in [1, 1000]") !=
+          std::string::npos);
+}
+
+// dwarf.x's beard ends in two braids of small bones (Joint36-39-40-41 and Joint37-38-42-43) merged into the head's
+// body. Their lower ends hang 30-48 cm below the head joint: they are left out, and only the head changes.
+TEST_CASE("gen: dwarf.x's braid ends are left out of the head's body", "[gen][corpus]") {
+    AFB_REQUIRE_CORPUS(corpus);
+    afb::text::Diagnostics diags;
+    const auto rig = afb::gen::importRig(corpus / "assimp-rigs/test/models-nonbsd/X/dwarf.x", {}, diags);
+    REQUIRE(rig);
+    const auto withRule = [&](double maxMergeGrowth) {
+        afb::gen::GenRules rules = afb::gen::defaultRules();
+        rules.maxMergeGrowth = maxMergeGrowth;
+        const auto g = generate(*rig, diags, rules);
+        REQUIRE(g);
+        return *g;
+    };
+    const afb::gen::Generated byDefault = withRule(afb::gen::defaultRules().maxMergeGrowth);
+    const afb::gen::Generated off = withRule(0);
+    const afb::gen::Generated ownOnly = withRule(1); // every merged bone that hangs off a body left out
+    INFO(diags.str());
+    int leftOut = 0;
+    std::vector<std::string> cut;
+    for (const auto& s : byDefault.stray) {
+        CHECK(s.body == "head");
+        CHECK(s.growth > afb::gen::defaultRules().maxMergeGrowth);
+        leftOut += s.vertices;
+        cut.push_back(s.joint);
+    }
+    CHECK(cut == std::vector<std::string>{"Joint40", "Joint42"});
+    CHECK(off.stray.empty());
+    REQUIRE(byDefault.bodies.size() == off.bodies.size());
+    for (std::size_t i = 0; i < off.bodies.size(); ++i) {
+        INFO(off.bodies[i].name);
+        if (off.bodies[i].joint == "head") {
+            CHECK(byDefault.bodies[i].vertices == off.bodies[i].vertices - leftOut);
+            CHECK(byDefault.bodies[i].volumeUnits3 < off.bodies[i].volumeUnits3);
+        } else {
+            CHECK(byDefault.bodies[i].volumeUnits3 == off.bodies[i].volumeUnits3);
+        }
+    }
+    // Each braid, judged apart from the other, grows the head's own body by at most 0.6 of it: two braids, 2.2.
+    const auto headVolume = [](const afb::gen::Generated& g) { return bodyOf(g, "head").volumeUnits3; };
+    CHECK(headVolume(byDefault) <= 2.2 * headVolume(ownOnly));
+    CHECK(headVolume(ownOnly) < headVolume(byDefault));
 }

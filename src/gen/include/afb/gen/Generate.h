@@ -54,6 +54,13 @@ struct GenRules {
     double minBodyFraction = 0.08;
     int minVertices = 8;              ///< so does a bone with fewer vertices than this …
     double minVertexFraction = 0.005; ///< … or than this fraction of the model's vertices
+    /// A bone merged into an ancestor's body because it is too small for one of its own (the three rules above and
+    /// minVolumeRatio) adds its vertices to that body only while the body, fitted to its own bones' vertices and those
+    /// of the merged bones between it and them, stays within this factor of the volume fitted to its own bones'
+    /// alone (its own: the bones not merged for their size, and merged links to a body hanging from it). A bone
+    /// that would grow it more (a braid or strap hanging off the head) is cut with every bone hanging from it: their
+    /// vertices are left out of every body and reported as stray (see StrayVertices::growth). 0 turns the rule off.
+    double maxMergeGrowth = 1.6;
     /// After fitting, a body merges into its parent (the smallest ratio first) when it and every body hanging from it
     /// are under this fraction of the parent's volume (a leaf, a braid of helper bones), or when it is under this
     /// fraction of the smaller of its parent and its largest child (a thin link): with one density, a 10:1 mass
@@ -74,10 +81,10 @@ struct GenRules {
 GenRules defaultRules();
 
 /// The default rules with the keys of a JSON file written over them. Keys: weightThreshold, merge, keep, skip,
-/// skipSurfaces, strayFactor, minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes, densityKgM3,
-/// forward ([x, y, z]), joints (a list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed, coneDeg,
-/// tiltDeg, tiltToward, minDeg, maxDeg, bend, friction}; put before the defaults, so they win), fallback (an object as
-/// in joints). An unknown key, a wrong type or a bad regular expression is an error naming the file.
+/// skipSurfaces, strayFactor, maxMergeGrowth, minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes,
+/// densityKgM3, forward ([x, y, z]), joints (a list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed,
+/// coneDeg, tiltDeg, tiltToward, minDeg, maxDeg, bend, friction}; put before the defaults, so they win), fallback (an
+/// object as in joints). An unknown key, a wrong type or a bad regular expression is an error naming the file.
 std::optional<GenRules> loadRules(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 /// The same from JSON text; `fileName` is used in messages.
 std::optional<GenRules> parseRules(const std::string& json, const std::string& fileName,
@@ -92,17 +99,20 @@ struct GenOptions {
     std::string outDir; ///< the content folder as the user gave it: messages about the written files name it
 };
 
-/// Vertices of one bone that no body is fitted to: far from the bone (GenRules::strayFactor) or on a skipped surface
-/// (GenRules::skipSurfaces). They stay in the written mesh, skinned to their bones as before.
+/// Vertices of one bone that no body is fitted to: far from the bone (GenRules::strayFactor), on a skipped surface
+/// (GenRules::skipSurfaces), or of a small bone that would grow the body it merges into too much
+/// (GenRules::maxMergeGrowth). They stay in the written mesh, skinned to their bones as before.
 struct StrayVertices {
     std::string joint;    ///< the bone that weighs them most
-    std::string surface;  ///< the surface matched by skipSurfaces; empty for strays by distance
-    int vertices = 0;     ///< how many
-    int boneVertices = 0; ///< how many vertices the bone weighs most, these included
-    double nearestM = 0;  ///< their least distance from the bone, metres
-    double farthestM = 0; ///< their greatest distance from the bone, metres
-    double medianM = 0;   ///< the median distance of all the bone's vertices, metres
-    double limitM = 0;    ///< the distance past which a vertex is stray, metres
+    std::string surface;  ///< the surface matched by skipSurfaces; empty for the other rules
+    std::string body;     ///< maxMergeGrowth: the joint naming the body the bone merged into; empty for the others
+    int vertices = 0;     ///< how many (maxMergeGrowth: of the bone and the bones hanging from it)
+    int boneVertices = 0; ///< how many vertices the bone weighs most, these included (maxMergeGrowth: = vertices)
+    double nearestM = 0;  ///< their least distance from the bone (maxMergeGrowth: from the body's joint), metres
+    double farthestM = 0; ///< their greatest distance from the bone (maxMergeGrowth: from the body's joint), metres
+    double medianM = 0;   ///< strayFactor: the median distance of all the bone's vertices, metres
+    double limitM = 0;    ///< strayFactor: the distance past which a vertex is stray, metres
+    double growth = 0;    ///< maxMergeGrowth: the body's volume with them over its own bones' volume (0 otherwise)
 };
 
 /// Which vertices (per surface, per vertex) no body is fitted to, by the skipSurfaces and strayFactor rules, and
