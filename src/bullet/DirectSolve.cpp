@@ -19,6 +19,10 @@ using direct::sideA;
 using direct::sideB;
 using direct::SideJ;
 
+// The compliance of a row holding a group redundantly, per unit of its own inverse effective mass
+// (softenRedundantHolds).
+constexpr double kRedundantHoldCompliance = 1e-2;
+
 // The group's tree: a node per body and per jointed body pair, rooted at the joint to the world if there is one.
 // False when the rows do not form one tree (a loop, more than one joint to the world).
 bool RagdollSolver::Direct::layOut(Group& group) {
@@ -258,6 +262,41 @@ bool RagdollSolver::Direct::groupRows(const btAlignedObjectArray<btSolverBody>& 
     return true;
 }
 
+// A group held to bodies outside it (the world, a keyframed or a static body) through two constraints or more: a
+// body of a partial ragdoll between two keyframed ones (the pelvis above keyframed thighs) or a figure pinned to the
+// world twice. Their hard rows can then outnumber the group's freedoms (two universal hips: eight rows on the
+// pelvis's six) and agree only as far as the outside bodies keep what the joints hold; keyframed bodies move by
+// themselves, along an animation interpolated between its frames, in float, that keeps it only nearly. The exact
+// solve of contradicting rows has no solution: its only regularisation, 1e-9 of the largest diagonal, meets the
+// contradiction with an impulse a billion times the row's, the iterations add as much again each time the residual
+// comes back, warm starting carries it from step to step, and in float those impulses cancel only to their
+// rounding, which kicks the bodies (the pelvis of the humanoid on keyframed legs turned 0.84 rad/s off its walk).
+// These rows get a compliance of kRedundantHoldCompliance times their own inverse effective mass instead, in the
+// row's cfm (its residual as well as the factor): the solve then meets a contradiction as a least-squares
+// compromise with a bounded impulse, the same every iteration, and a row the others do not contradict reaches the
+// velocity it asks for within that fraction (the position pass closes what is left). At 1e-3 the rounding still
+// kicked the pelvis 0.29 rad/s at a 240 Hz step; at 1e-2 it follows its walk within 0.02 rad/s at 60 Hz and 0.05
+// rad/s at 240 Hz. A group held through one constraint (a figure hanging from the world, from a keyframed root)
+// keeps its hard rows bit for bit.
+void RagdollSolver::Direct::softenRedundantHolds(Group& group, const btAlignedObjectArray<btSolverConstraint>& pool) {
+    const void* first = nullptr;
+    bool redundant = false;
+    for (const JointRow& row : group.rows) {
+        const btSolverConstraint& c = pool[row.pool];
+        if ((row.bodyA < 0) == (row.bodyB < 0) || c.m_cfm != 0) continue; // inside the group, or soft already
+        if (first == nullptr) first = c.m_originalContactPoint;
+        else redundant = redundant || c.m_originalContactPoint != first;
+    }
+    if (!redundant) return;
+    for (std::size_t i = 0; i < group.rows.size(); ++i) {
+        const JointRow& row = group.rows[i];
+        if ((row.bodyA < 0) == (row.bodyB < 0) || pool[row.pool].m_cfm != 0) continue;
+        const double own = row.bodyA >= 0 ? dot(row.a, row.a) : dot(row.b, row.b);
+        group.cfm(static_cast<Eigen::Index>(i)) += kRedundantHoldCompliance * own;
+        group.soft = true;
+    }
+}
+
 void RagdollSolver::Direct::factorGroups(const btAlignedObjectArray<btSolverBody>& bodyPool,
                                          const btAlignedObjectArray<btSolverConstraint>& pool) {
     // A + C per group, factored: along the figure's tree when it has one, densely otherwise.
@@ -275,6 +314,7 @@ void RagdollSolver::Direct::factorGroups(const btAlignedObjectArray<btSolverBody
             group.target(i) = double(c.m_rhs) / double(c.m_jacDiagABInv);
             group.soft = group.soft || group.cfm(i) != 0;
         }
+        softenRedundantHolds(group, pool);
         // A joint loop makes A singular; a relative regularisation keeps the factor finite.
         const double epsilon = 1e-9 * largest;
         group.useTree = Direct::factorTree(group, bodyPool, epsilon);

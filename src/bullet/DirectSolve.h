@@ -182,6 +182,9 @@ struct RagdollSolver::Direct {
                 unionParent[static_cast<std::size_t>(unionParent[static_cast<std::size_t>(i)])];
         return i;
     }
+    // Rows that hold a group to bodies outside it through more than one constraint get a small compliance
+    // (kRedundantHoldCompliance of their own inverse effective mass, added to `cfm`; DirectSolve.cpp).
+    static void softenRedundantHolds(Group& group, const btAlignedObjectArray<btSolverConstraint>& pool);
     static bool layOut(Group& group);
     static bool factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool, double epsilon);
     // A row's response through one group whose tree is factored (side s's slot; withA, withB: which of its
