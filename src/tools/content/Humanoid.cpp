@@ -211,6 +211,13 @@ std::string humanoidAf(const Skeleton& sk) {
     return writeAf(af.decl);
 }
 
+// The turn that takes bone `from`→`to` of the bind pose to where `turn` points it, by the shortest arc: a swing
+// without twist about the bone, which is what a universal joint (the humanoid's shoulders and hips) lets a limb do.
+Quaterniond swingOf(const Skeleton& sk, const std::string& from, const std::string& to, const Quaterniond& turn) {
+    const Vector3d rest = (sk.pos(to) - sk.pos(from)).normalized();
+    return Quaterniond::FromTwoVectors(rest, turn * rest);
+}
+
 std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
     const int numFrames = 25; // 24 distinct frames plus the first again, so the cycle loops (1 s at 24 fps)
     std::vector<int> animated(sk.joints.size(), 0);
@@ -237,18 +244,15 @@ std::string humanoidWalk(const Skeleton& sk, const std::vector<Mesh>& meshes) {
             // Negative angles about +Y swing a limb forward (-Z towards +X).
             const double thigh = -25 * std::sin(ph);
             const double knee = 5 + 45 * std::pow(std::max(0.0, std::cos(ph)), 2);
-            // The hip is universal too: the thigh swings to where the turn about Y points it, without twist.
-            const Vector3d thighRest = Vector3d(0, sy * 1, -17).normalized();
             pose.q[static_cast<std::size_t>(sk.index(p + "_thigh"))] =
-                Quaterniond::FromTwoVectors(thighRest, aa(thigh, Vector3d::UnitY()) * thighRest);
+                swingOf(sk, p + "_thigh", p + "_shin", aa(thigh, Vector3d::UnitY()));
             pose.q[static_cast<std::size_t>(sk.index(p + "_shin"))] = aa(knee, Vector3d::UnitY());
             pose.q[static_cast<std::size_t>(sk.index(p + "_foot"))] = aa(-0.6 * (thigh + knee), Vector3d::UnitY());
-            // Arms: lowered from the 45-degree rest to about 80 degrees, swinging against the legs. The shoulder
-            // is a universal joint, which locks the upper arm's turn about its own bone, so the arm is brought to
-            // where the two turns point it by the shortest arc from its rest direction (a swing without twist).
-            const Vector3d rest(0, sy * s45, -s45);
-            const Vector3d aim = aa(20 * std::sin(ph), Vector3d::UnitY()) * (aa(-sy * 35, Vector3d::UnitX()) * rest);
-            pose.q[static_cast<std::size_t>(sk.index(p + "_upperarm"))] = Quaterniond::FromTwoVectors(rest, aim);
+            // Arms: lowered from the 45-degree rest to about 80 degrees, swinging against the legs; shoulders and
+            // hips are universal joints, so each limb swings without twist (swingOf).
+            pose.q[static_cast<std::size_t>(sk.index(p + "_upperarm"))] =
+                swingOf(sk, p + "_upperarm", p + "_forearm",
+                        aa(20 * std::sin(ph), Vector3d::UnitY()) * aa(-sy * 35, Vector3d::UnitX()));
             pose.q[static_cast<std::size_t>(sk.index(p + "_forearm"))] = aa(20, Vector3d(0, -s45, -sy * s45));
         }
         frames.push_back(pose);
@@ -296,20 +300,17 @@ std::string humanoidIdle(const Skeleton& sk, const std::vector<Mesh>& meshes) {
             const double sy = p == "l" ? 1 : -1;
             // The leg the weight leaves bends its knee a little; the foot turns back flat on the ground.
             const double knee = 4 + 3 * (1 - sy * sway);
-            // Shoulders and hips are universal joints (no twist about the bone): limbs swing by the shortest arc.
-            const Vector3d thighRest = Vector3d(0, sy * 1, -17).normalized();
-            const Quaterniond thigh =
-                Quaterniond::FromTwoVectors(thighRest, aa(-0.5 * knee, Vector3d::UnitY()) *
-                                                           (aa(0.5 * sy, Vector3d::UnitX()) * thighRest));
+            // Shoulders and hips are universal joints: limbs swing without twist (swingOf).
+            const Quaterniond thigh = swingOf(sk, p + "_thigh", p + "_shin",
+                                              aa(-0.5 * knee, Vector3d::UnitY()) * aa(0.5 * sy, Vector3d::UnitX()));
             const Quaterniond shin = aa(knee, Vector3d::UnitY());
             pose.q[at(p + "_thigh")] = thigh;
             pose.q[at(p + "_shin")] = shin;
             pose.q[at(p + "_foot")] = (root * thigh * shin).inverse();
             const double s45 = std::sin(45 * kDeg);
-            const Vector3d armRest(0, sy * s45, -s45);
             const Quaterniond lower = aa(-sy * (38 - 2 * breath), Vector3d::UnitX());
             pose.q[at(p + "_upperarm")] =
-                Quaterniond::FromTwoVectors(armRest, aa(-3 * breath - 4, Vector3d::UnitY()) * (lower * armRest));
+                swingOf(sk, p + "_upperarm", p + "_forearm", aa(-3 * breath - 4, Vector3d::UnitY()) * lower);
             pose.q[at(p + "_forearm")] = aa(12 + 3 * breath, Vector3d(0, -s45, -sy * s45));
         }
         frames.push_back(pose);
