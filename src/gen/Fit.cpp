@@ -514,8 +514,8 @@ std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitI
         std::vector<int> axisJoints;
         std::vector<CutBranch> cut =
             limitMergeGrowth(rig, rules, in.mergedSmall, childHeads, height, b, members[bi], axisJoints);
-        settleBranches(rig, rules, {in.minVertices, height, in.owned}, std::move(cut), static_cast<int>(bi), b,
-                       promoted, stray, report);
+        settleBranches(rig, rules, {in.minVertices, height, in.owned, in.skipped}, std::move(cut), static_cast<int>(bi),
+                       b, promoted, stray, report);
         if (b.points.size() < 4) addCubePoints(rig, b, height);
         fitFrame(b, boneAxis(rig, b.head, childHeads, axisJoints), height, rules.shapes);
     }

@@ -112,12 +112,14 @@ struct BodySizing {
     int minVertices = 0;                                    ///< fewest vertices (minVertices, minVertexFraction)
     double height = 0;                                      ///< the model's, as fitting sees it
     const std::vector<std::vector<Eigen::Vector3d>>& owned; ///< per joint, the vertices it weighs most
+    const std::vector<bool>& skipped;                       ///< per joint, matched by the rules' skip list
 };
 
 /// The branches maxMergeGrowth cut from `body` (number `bodyIndex`): each big enough for a body of its own
 /// (bodySized, its length from its bone to the farthest joint hanging from it) becomes one, fitted as a leaf body
-/// jointed to `body`, appended to `promoted` and its joints taken out of `body.joints`; the vertices of the others
-/// are set in `stray` and reported, one entry per cut bone.
+/// (its axis toward its farthest joint not matched by the skip list) jointed to `body`, appended to `promoted` and
+/// its joints taken out of `body.joints`; the vertices of the others are set in `stray` and reported, one entry per
+/// cut bone.
 void settleBranches(const Rig& rig, const GenRules& rules, const BodySizing& sizing, std::vector<CutBranch> cut,
                     int bodyIndex, BodyFit& body, std::vector<BodyFit>& promoted, VertexMask& stray,
                     std::vector<StrayVertices>& report);

@@ -77,7 +77,8 @@ double branchLength(const Rig& rig, const CutBranch& branch) {
 }
 
 // A cut branch as a body of its own: jointed to `parent` at the branch's bone, fitted to the branch's vertices as
-// a leaf body (its axis toward its farthest joint), named by its bone.
+// a leaf body, named by its bone. Its axis runs toward its farthest joint but a skipped one's: a prop's bone (a
+// lamp held in the hand) is no end of the limb.
 BodyFit branchBody(const Rig& rig, const GenRules& rules, const BodySizing& sizing, const CutBranch& branch, int parent,
                    std::vector<Eigen::Vector3d> points) {
     BodyFit c;
@@ -93,7 +94,10 @@ BodyFit branchBody(const Rig& rig, const GenRules& rules, const BodySizing& sizi
             c.mainJoint = j;
         }
     c.points = std::move(points);
-    fitFrame(c, boneAxis(rig, c.head, {}, c.joints), sizing.height, rules.shapes);
+    std::vector<int> axisJoints;
+    for (int j : c.joints)
+        if (!sizing.skipped[static_cast<std::size_t>(j)]) axisJoints.push_back(j);
+    fitFrame(c, boneAxis(rig, c.head, {}, axisJoints.empty() ? c.joints : axisJoints), sizing.height, rules.shapes);
     return c;
 }
 
