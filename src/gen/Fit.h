@@ -80,10 +80,11 @@ double boneDistance(const Rig& rig, int joint, const Eigen::Vector3d& p);
 /// The median of `values` (at least one).
 double median(std::vector<double> values);
 
-/// The maxPropGrowth rule on one body (GenRules::maxPropGrowth): for each of its `own` bones, the vertices farther
-/// from the bone than GenRules::propRadius times their median distance are removed from `body.points` and
-/// `members`, set in `stray` and reported, when the body fitted to its own bones' vertices with them is more than
-/// the factor times the body fitted without them. Each bone is judged with every other bone's vertices kept.
+/// The maxPropGrowth rule on one body (GenRules::maxPropGrowth): for each of its `own` bones with at least 8
+/// members, the vertices farther from the bone than GenRules::propRadius times their median distance are removed
+/// from `body.points` and `members`, set in `stray` and reported, when they are at most a quarter of the bone's and
+/// the body fitted to its own bones' vertices with them is more than the factor times the body fitted without
+/// them. Each bone is judged with every other bone's vertices kept.
 void trimProps(const Rig& rig, const GenRules& rules, const std::set<int>& own, const std::vector<int>& childHeads,
                double height, BodyFit& body, std::vector<Member>& members, VertexMask& stray,
                std::vector<StrayVertices>& report);
