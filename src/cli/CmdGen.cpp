@@ -65,7 +65,8 @@ nlohmann::json unitsJson(const gen::RigUnits& u) {
 nlohmann::json strayJson(const std::vector<gen::StrayVertices>& stray) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& s : stray)
-        out.push_back({{"joint", s.joint},
+        out.push_back({{"rule", s.rule},
+                       {"joint", s.joint},
                        {"surface", s.surface},
                        {"body", s.body},
                        {"vertices", s.vertices},

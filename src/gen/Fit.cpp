@@ -34,6 +34,14 @@ double extentOf(const std::vector<Eigen::Vector3d>& points) {
     return (hi - lo).maxCoeff();
 }
 
+} // namespace
+
+bool bodySized(const std::vector<Eigen::Vector3d>& points, double boneLength, int minVertices, double minSpan) {
+    return static_cast<int>(points.size()) >= minVertices && std::max(extentOf(points), boneLength) >= minSpan;
+}
+
+namespace {
+
 // Principal axes of a point cloud (columns, by decreasing variance), a right-handed basis.
 Eigen::Matrix3d principalAxes(const std::vector<Eigen::Vector3d>& points) {
     if (points.size() < 2) return Eigen::Matrix3d::Identity();
@@ -138,9 +146,11 @@ struct FitInput {
     const std::vector<std::vector<Eigen::Vector3d>>& owned;
     const std::vector<bool>& mergedSmall;
     const VertexMask& stray;
+    int minVertices; // the fewest vertices of a body of its own (leastVertices)
 };
 
-// Fits one body per group; `stray` and `report` take the vertices maxMergeGrowth leaves out.
+// Fits one body per group, and one per branch maxMergeGrowth cuts that is big enough for it; `stray` and `report`
+// take the vertices maxPropGrowth and maxMergeGrowth leave out.
 std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitInput& in, VertexMask& stray,
                                std::vector<StrayVertices>& report);
 
@@ -182,6 +192,12 @@ Ownership ownVertices(const Rig& rig, const std::vector<std::regex>& skipRe, con
                 out.owned[static_cast<std::size_t>(top->joint)].push_back(v.position);
         }
     return out;
+}
+
+// The fewest vertices a group needs for a body of its own (minVertices, minVertexFraction).
+int leastVertices(const GenRules& rules, std::size_t vertexCount) {
+    return std::max(rules.minVertices,
+                    static_cast<int>(std::ceil(rules.minVertexFraction * static_cast<double>(vertexCount))));
 }
 
 // Which joint heads each joint's body (group[j]), as the rules and the sizes decide before fitting.
@@ -245,14 +261,10 @@ Grouping groupJoints(const Rig& rig, const GenRules& rules, const Ownership& own
             (matchesAny(mergeRe, name) || own.skipped[static_cast<std::size_t>(j)]))
             g.group[static_cast<std::size_t>(j)] = g.group[static_cast<std::size_t>(parent)];
     }
-    const int minVertices =
-        std::max(rules.minVertices,
-                 static_cast<int>(std::ceil(rules.minVertexFraction * static_cast<double>(own.vertexCount))));
+    const int minVertices = leastVertices(rules, own.vertexCount);
     for (int j = n - 1; j >= 1; --j) {
         if (g.group[static_cast<std::size_t>(j)] != j || g.kept[static_cast<std::size_t>(j)]) continue;
-        const auto pts = g.pointsOf(j);
-        if (static_cast<int>(pts.size()) < minVertices ||
-            std::max(extentOf(pts), g.boneLength(j)) < rules.minBodyFraction * height)
+        if (!bodySized(g.pointsOf(j), g.boneLength(j), minVertices, rules.minBodyFraction * height))
             g.mergeSmall(j, g.group[static_cast<std::size_t>(g.parentOf(j))]);
     }
     while (static_cast<int>(g.pointsOf(0).size()) < std::max(minVertices, 1)) {
@@ -280,7 +292,7 @@ int smallestBody(const std::vector<BodyFit>& bodies, const std::vector<bool>& ke
     double worstRatio = minVolumeRatio;
     for (std::size_t i = 1; i < bodies.size(); ++i) {
         const BodyFit& b = bodies[i];
-        if (b.parentBody < 0 || kept[static_cast<std::size_t>(b.head)]) continue;
+        if (b.parentBody < 0 || b.promoted || kept[static_cast<std::size_t>(b.head)]) continue;
         const double parentVolume = bodies[static_cast<std::size_t>(b.parentBody)].volume;
         double largestChild = 0;
         for (const BodyFit& c : bodies)
@@ -307,9 +319,10 @@ std::vector<BodyFit> fitBodies(const Rig& rig, const GenRules& rules, VertexMask
     for (;;) {
         VertexMask leftOut = stray;
         std::vector<StrayVertices> grown;
-        std::vector<BodyFit> bodies =
-            fitGroups(rig, rules, {grouping.group, own.skipped, own.owned, grouping.mergedSmall, stray}, leftOut,
-                      grown);
+        std::vector<BodyFit> bodies = fitGroups(rig, rules,
+                                                {grouping.group, own.skipped, own.owned, grouping.mergedSmall, stray,
+                                                 leastVertices(rules, own.vertexCount)},
+                                                leftOut, grown);
         const int worst = smallestBody(bodies, grouping.kept, rules.minVolumeRatio);
         if (worst < 0) {
             stray = std::move(leftOut);
@@ -453,6 +466,25 @@ std::vector<std::vector<Member>> assignVertices(const Rig& rig, const GenRules& 
     return members;
 }
 
+// `extra` put among `bodies` in the joint order of their heads, every parentBody index renumbered to match.
+void insertBodies(std::vector<BodyFit>& bodies, std::vector<BodyFit> extra) {
+    if (extra.empty()) return;
+    for (BodyFit& b : extra) bodies.push_back(std::move(b));
+    std::vector<std::size_t> order(bodies.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return bodies[a].head < bodies[b].head; });
+    std::vector<int> newIndex(bodies.size());
+    for (std::size_t k = 0; k < order.size(); ++k) newIndex[order[k]] = static_cast<int>(k);
+    std::vector<BodyFit> sorted;
+    for (std::size_t i : order) {
+        sorted.push_back(std::move(bodies[i]));
+        if (sorted.back().parentBody >= 0)
+            sorted.back().parentBody = newIndex[static_cast<std::size_t>(sorted.back().parentBody)];
+    }
+    bodies = std::move(sorted);
+}
+
 } // namespace
 
 std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitInput& in, VertexMask& stray,
@@ -471,16 +503,23 @@ std::vector<BodyFit> fitGroups(const Rig& rig, const GenRules& rules, const FitI
                 b.mainJoint = j;
             }
     }
+    std::vector<BodyFit> promoted;
     for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
         BodyFit& b = bodies[bi];
         std::vector<int> childHeads;
         for (const BodyFit& c : bodies)
             if (c.parentBody == static_cast<int>(bi)) childHeads.push_back(c.head);
-        const std::vector<int> joints =
-            limitMergeGrowth(rig, rules, in.mergedSmall, childHeads, height, b, members[bi], stray, report);
+        trimProps(rig, rules, ownJoints(rig, in.mergedSmall, childHeads, b), childHeads, height, b, members[bi], stray,
+                  report);
+        std::vector<int> axisJoints;
+        std::vector<CutBranch> cut =
+            limitMergeGrowth(rig, rules, in.mergedSmall, childHeads, height, b, members[bi], axisJoints);
+        settleBranches(rig, rules, {in.minVertices, height, in.owned, in.skipped}, std::move(cut), static_cast<int>(bi),
+                       b, promoted, stray, report);
         if (b.points.size() < 4) addCubePoints(rig, b, height);
-        fitFrame(b, boneAxis(rig, b.head, childHeads, joints), height, rules.shapes);
+        fitFrame(b, boneAxis(rig, b.head, childHeads, axisJoints), height, rules.shapes);
     }
+    insertBodies(bodies, std::move(promoted));
     return bodies;
 }
 

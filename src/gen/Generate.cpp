@@ -165,14 +165,25 @@ std::string growthText(double factor) {
 
 // One warning per bone (or skipped surface) whose vertices no body is fitted to, naming the model as given.
 void reportStray(const std::vector<StrayVertices>& stray, const std::string& model, double maxGrowth,
-                 text::Diagnostics& diagnostics) {
+                 double maxPropGrowth, text::Diagnostics& diagnostics) {
     for (const StrayVertices& s : stray) {
         if (!s.surface.empty()) {
             diagnostics.warning({model, 0, 0}, "surface \"" + s.surface + "\" (" + std::to_string(s.vertices) +
                                                    " vertices) is skipped by the rules: no body is fitted to it");
             continue;
         }
-        if (!s.body.empty()) {
+        if (s.rule == "maxPropGrowth") {
+            diagnostics.warning({model, 0, 0},
+                                std::to_string(s.vertices) + " of the " + std::to_string(s.boneVertices) +
+                                    " vertices of bone \"" + s.joint + "\" lie " + centimetres(s.nearestM) + "-" +
+                                    centimetres(s.farthestM) + " cm from it, past " + centimetres(s.limitM) +
+                                    " cm (its median " + centimetres(s.medianM) +
+                                    " cm), and would make the body of \"" + s.body + "\" " + growthText(s.growth) +
+                                    " times the volume of its other vertices' (at most " + growthText(maxPropGrowth) +
+                                    "): a prop on the bone? no body is fitted to them (rules: maxPropGrowth)");
+            continue;
+        }
+        if (s.rule == "maxMergeGrowth") {
             diagnostics.warning({model, 0, 0},
                                 std::to_string(s.vertices) + " of the " + std::to_string(s.boneVertices) +
                                     " vertices of bone \"" + s.joint + "\" and the bones hanging from it lie " +
@@ -309,7 +320,7 @@ std::optional<Generated> generateFigure(const Rig& rig, const GenOptions& option
     detail::VertexMask stray = strayVertices(rig, options.rules, out.stray);
     const std::vector<BodyFit> fits = detail::fitBodies(rig, options.rules, stray, out.stray);
     reportStray(out.stray, options.source.empty() ? options.name : options.source, options.rules.maxMergeGrowth,
-                diagnostics);
+                options.rules.maxPropGrowth, diagnostics);
     const Eigen::Vector3d forward = forwardOf(rig, options.rules);
     double totalVolume = 0;
     for (const BodyFit& b : fits) totalVolume += b.volume;

@@ -159,6 +159,14 @@ std::optional<GenRules> parseRules(const std::string& json, const std::string& f
                 r.maxMergeGrowth = number(v, key);
                 if (r.maxMergeGrowth != 0 && !(r.maxMergeGrowth >= 1 && r.maxMergeGrowth <= 1000))
                     throw RulesError{"\"maxMergeGrowth\" must be 0 (off) or in [1, 1000]"};
+            } else if (key == "maxPropGrowth") {
+                r.maxPropGrowth = number(v, key);
+                if (r.maxPropGrowth != 0 && !(r.maxPropGrowth >= 1 && r.maxPropGrowth <= 1000))
+                    throw RulesError{"\"maxPropGrowth\" must be 0 (off) or in [1, 1000]"};
+            } else if (key == "propRadius") {
+                r.propRadius = number(v, key);
+                if (!(r.propRadius >= 1 && r.propRadius <= 1000))
+                    throw RulesError{"\"propRadius\" must be in [1, 1000]"};
             } else if (key == "minVertexFraction") {
                 r.minVertexFraction = number(v, key);
                 if (r.minVertexFraction < 0 || r.minVertexFraction >= 1)

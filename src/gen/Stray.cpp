@@ -5,16 +5,12 @@
 #include <cmath>
 #include <regex>
 
+#include "Fit.h"
 #include "afb/gen/Generate.h"
 
 namespace afb::gen {
+namespace detail {
 namespace {
-
-constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median
-constexpr double kMadToSigma = 1.4826;      // the median absolute deviation of a normal distribution, in σ
-// A vertex this close to its bone's median distance, as a fraction of the model's height, is never stray: a bone
-// whose skin hugs it (a median near zero) would otherwise lose its next ring of vertices.
-constexpr double kMinStrayFraction = 0.1;
 
 double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     const Eigen::Vector3d ab = b - a;
@@ -23,6 +19,8 @@ double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const
     return (a + t * ab - p).norm();
 }
 
+} // namespace
+
 double median(std::vector<double> values) {
     const std::size_t mid = values.size() / 2;
     std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
@@ -30,6 +28,30 @@ double median(std::vector<double> values) {
     if (values.size() % 2 == 1) return upper;
     return (upper + *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid))) / 2;
 }
+
+double boneDistance(const Rig& rig, int joint, const Eigen::Vector3d& p) {
+    const Eigen::Vector3d head = rig.joints[static_cast<std::size_t>(joint)].bind.position;
+    double d = INFINITY;
+    bool leaf = true;
+    for (const RigJoint& c : rig.joints)
+        if (c.parent == joint) {
+            d = std::min(d, segmentDistance(p, head, c.bind.position));
+            leaf = false;
+        }
+    return leaf ? segmentDistance(p, head, head) : d;
+}
+
+} // namespace detail
+
+namespace {
+
+using detail::median;
+
+constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median
+constexpr double kMadToSigma = 1.4826;      // the median absolute deviation of a normal distribution, in σ
+// A vertex this close to its bone's median distance, as a fraction of the model's height, is never stray: a bone
+// whose skin hugs it (a median near zero) would otherwise lose its next ring of vertices.
+constexpr double kMinStrayFraction = 0.1;
 
 int topJoint(const RigVertex& v) {
     const auto top = std::max_element(v.influences.begin(), v.influences.end(),
@@ -92,6 +114,7 @@ std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rul
         if (surfaceSkipped(s, skipRe)) {
             std::fill(stray.back().begin(), stray.back().end(), true);
             StrayVertices r;
+            r.rule = "skipSurfaces";
             r.surface = s.name.empty() ? s.material : s.name;
             r.vertices = static_cast<int>(s.vertices.size());
             report.push_back(r);
@@ -108,18 +131,11 @@ std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rul
         std::vector<Sample>& samples = byJoint[j];
         if (samples.size() < kMinBoneVertices) continue;
         // The bone: segments from its joint to each child joint, or its joint alone.
-        const Eigen::Vector3d head = rig.joints[j].bind.position;
-        std::vector<Eigen::Vector3d> tails;
-        for (const RigJoint& c : rig.joints)
-            if (c.parent == static_cast<int>(j)) tails.push_back(c.bind.position);
-        if (tails.empty()) tails.push_back(head);
-        for (Sample& sample : samples) {
-            const Eigen::Vector3d& p = rig.surfaces[sample.surface].vertices[sample.vertex].position;
-            sample.distance = INFINITY;
-            for (const Eigen::Vector3d& tail : tails)
-                sample.distance = std::min(sample.distance, segmentDistance(p, head, tail));
-        }
+        for (Sample& sample : samples)
+            sample.distance = detail::boneDistance(rig, static_cast<int>(j),
+                                                   rig.surfaces[sample.surface].vertices[sample.vertex].position);
         StrayVertices r;
+        r.rule = "strayFactor";
         r.joint = rig.joints[j].name;
         markFar(samples, rules.strayFactor, height, stray, r);
         if (r.vertices > 0) report.push_back(r);

@@ -58,9 +58,19 @@ struct GenRules {
     /// minVolumeRatio) adds its vertices to that body only while the body, fitted to its own bones' vertices and those
     /// of the merged bones between it and them, stays within this factor of the volume fitted to its own bones'
     /// alone (its own: the bones not merged for their size, and merged links to a body hanging from it). A bone
-    /// that would grow it more (a braid or strap hanging off the head) is cut with every bone hanging from it: their
-    /// vertices are left out of every body and reported as stray (see StrayVertices::growth). 0 turns the rule off.
+    /// that would grow it more (a braid or strap hanging off the head) is cut with every bone hanging from it. A cut
+    /// branch big enough for a body of its own (minVertices, minVertexFraction, minBodyFraction) becomes one, jointed
+    /// to that body; a smaller one's vertices are left out of every body and reported as stray (see
+    /// StrayVertices::growth). 0 turns the rule off.
     double maxMergeGrowth = 1.6;
+    /// A prop modelled onto a bone's own skin (a horned helmet on the head bone): the vertices of one of a body's own
+    /// bones (as maxMergeGrowth counts them, with at least 8 vertices) farther from the bone than propRadius × their
+    /// median distance from it are left out of every body and reported (see StrayVertices), when they are at most a
+    /// quarter of the bone's vertices and the body fitted to its own bones' vertices with them is more than
+    /// maxPropGrowth times the body fitted without them. Each bone is judged with the others' vertices kept; the
+    /// rule runs before maxMergeGrowth, which then measures growth against the trimmed body. 0 turns it off.
+    double maxPropGrowth = 1.8;
+    double propRadius = 1.5; ///< maxPropGrowth's far vertices: past this multiple of the median distance (≥ 1)
     /// After fitting, a body merges into its parent (the smallest ratio first) when it and every body hanging from it
     /// are under this fraction of the parent's volume (a leaf, a braid of helper bones), or when it is under this
     /// fraction of the smaller of its parent and its largest child (a thin link): with one density, a 10:1 mass
@@ -81,10 +91,11 @@ struct GenRules {
 GenRules defaultRules();
 
 /// The default rules with the keys of a JSON file written over them. Keys: weightThreshold, merge, keep, skip,
-/// skipSurfaces, strayFactor, maxMergeGrowth, minBodyFraction, minVertices, minVertexFraction, minVolumeRatio, shapes,
-/// densityKgM3, forward ([x, y, z]), joints (a list: each {role, pattern, type: universal|hinge|ballAndSocket|fixed,
-/// coneDeg, tiltDeg, tiltToward, minDeg, maxDeg, bend, friction}; put before the defaults, so they win), fallback (an
-/// object as in joints). An unknown key, a wrong type or a bad regular expression is an error naming the file.
+/// skipSurfaces, strayFactor, maxMergeGrowth, maxPropGrowth, propRadius, minBodyFraction, minVertices,
+/// minVertexFraction, minVolumeRatio, shapes, densityKgM3, forward ([x, y, z]), joints (a list: each {role, pattern,
+/// type: universal|hinge|ballAndSocket|fixed, coneDeg, tiltDeg, tiltToward, minDeg, maxDeg, bend, friction}; put before
+/// the defaults, so they win), fallback (an object as in joints). An unknown key, a wrong type or a bad regular
+/// expression is an error naming the file.
 std::optional<GenRules> loadRules(const std::filesystem::path& path, text::Diagnostics& diagnostics);
 /// The same from JSON text; `fileName` is used in messages.
 std::optional<GenRules> parseRules(const std::string& json, const std::string& fileName,
@@ -100,19 +111,23 @@ struct GenOptions {
 };
 
 /// Vertices of one bone that no body is fitted to: far from the bone (GenRules::strayFactor), on a skipped surface
-/// (GenRules::skipSurfaces), or of a small bone that would grow the body it merges into too much
-/// (GenRules::maxMergeGrowth). They stay in the written mesh, skinned to their bones as before.
+/// (GenRules::skipSurfaces), of a small bone that would grow the body it merges into too much
+/// (GenRules::maxMergeGrowth), or a prop on a body's own bone (GenRules::maxPropGrowth). They stay in the written
+/// mesh, skinned to their bones as before.
 struct StrayVertices {
+    std::string rule;     ///< the rule that left them out: strayFactor, skipSurfaces, maxMergeGrowth, maxPropGrowth
     std::string joint;    ///< the bone that weighs them most
     std::string surface;  ///< the surface matched by skipSurfaces; empty for the other rules
-    std::string body;     ///< maxMergeGrowth: the joint naming the body the bone merged into; empty for the others
+    std::string body;     ///< maxMergeGrowth, maxPropGrowth: the joint naming the body; empty for the others
     int vertices = 0;     ///< how many (maxMergeGrowth: of the bone and the bones hanging from it)
     int boneVertices = 0; ///< how many vertices the bone weighs most, these included (maxMergeGrowth: = vertices)
     double nearestM = 0;  ///< their least distance from the bone (maxMergeGrowth: from the body's joint), metres
     double farthestM = 0; ///< their greatest distance from the bone (maxMergeGrowth: from the body's joint), metres
-    double medianM = 0;   ///< strayFactor: the median distance of all the bone's vertices, metres
-    double limitM = 0;    ///< strayFactor: the distance past which a vertex is stray, metres
-    double growth = 0;    ///< maxMergeGrowth: the body's volume with them over its own bones' volume (0 otherwise)
+    double medianM = 0;   ///< strayFactor, maxPropGrowth: the median distance of all the bone's vertices, metres
+    double limitM = 0;    ///< strayFactor, maxPropGrowth: the distance past which a vertex counts as far, metres
+    /// maxMergeGrowth: the body's volume with them over its own bones' volume; maxPropGrowth: over the volume
+    /// without them (0 for the other rules)
+    double growth = 0;
 };
 
 /// Which vertices (per surface, per vertex) no body is fitted to, by the skipSurfaces and strayFactor rules, and
