@@ -44,6 +44,10 @@ class BlockTree {
     bool factor();
     /// Solves H x = b in place (x holds b on entry, laid out by offset()).
     void solve(double* x) const;
+    /// solve() for a b that is zero outside nodes `a` and `b` (−1: none; a column of one row at one or two
+    /// bodies): the forward half walks only their paths to the root, the rest of which it would find zero, and
+    /// does the same arithmetic there as solve(), so the result is solve()'s to the bit.
+    void solveFrom(double* x, int a, int b) const;
 
   private:
     // What solve() needs of a node, in m_order (parentDim 0: a root).
@@ -51,7 +55,11 @@ class BlockTree {
         int dim, parentDim, offset, parentOffset;
         std::size_t diagAt, edgeAt, gainAt;
     };
+    void forwardAt(const Step& s, double* x) const;
+    void backward(double* x) const;
     std::vector<Step> m_steps;
+    std::vector<std::vector<int>> m_pathOf; // per node: the steps from it to its root, in elimination order
+    mutable std::vector<int> m_walk;        // solveFrom's scratch
     std::vector<int> m_dim, m_parent, m_offset, m_order; // m_order: every node after its children
     std::vector<std::size_t> m_diagAt, m_edgeAt, m_gainAt;
     std::vector<char> m_leaf, m_inverted;

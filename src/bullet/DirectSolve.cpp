@@ -529,7 +529,7 @@ void RagdollSolver::Direct::treeColumn(FreeRow& fr, int s, bool withA, bool with
     };
     if (xa >= 0) put(xa, sa);
     if (xb >= 0) put(xb, sb);
-    group.tree.solve(x.data());
+    group.tree.solveFrom(x.data(), xa, xb);
     fr.reaction[s] = static_cast<int>(reactions.size());
     reactions.resize(reactions.size() + static_cast<std::size_t>(k));
     double* reaction = reactions.data() + fr.reaction[s];
