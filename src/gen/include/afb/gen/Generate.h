@@ -128,6 +128,9 @@ struct StrayVertices {
     /// maxMergeGrowth: the body's volume with them over its own bones' volume; maxPropGrowth: over the volume
     /// without them (0 for the other rules)
     double growth = 0;
+    /// maxMergeGrowth: cut because the branches kept together grew the body past the limit, each within it alone
+    /// (`growth` is then the body's with every branch kept at that point)
+    bool together = false;
 };
 
 /// Which vertices (per surface, per vertex) no body is fitted to, by the skipSurfaces and strayFactor rules, and
