@@ -74,7 +74,8 @@ nlohmann::json strayJson(const std::vector<gen::StrayVertices>& stray) {
                        {"farthestM", s.farthestM},
                        {"medianM", s.medianM},
                        {"limitM", s.limitM},
-                       {"growth", s.growth}});
+                       {"growth", s.growth},
+                       {"together", s.together}});
     return out;
 }
 

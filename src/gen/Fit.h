@@ -94,13 +94,16 @@ void trimProps(const Rig& rig, const GenRules& rules, const std::set<int>& own, 
 struct CutBranch {
     int bone = 0;
     double growth = 0;           ///< the body's volume with the branch over its own bones' volume
+    bool together = false;       ///< cut for the growth of the branches kept together (each within the limit alone)
     std::vector<int> joints;     ///< the bone and the bones cut with it, ascending
     std::vector<Member> members; ///< their vertices, removed from the body
 };
 
 /// The maxMergeGrowth rule on one body (GenRules::maxMergeGrowth): the vertices of its joints set in `mergedSmall`
 /// (bones merged into it for their size) stay in `body.points` and `members` only while the body fitted to them
-/// stays within the factor of the volume of the body fitted to its other joints' vertices. The others are removed
+/// stays within the factor of the volume of the body fitted to its other joints' vertices, each branch judged alone
+/// and then the kept ones together (the kept bones that grow it most alone cut first, near-equal ones together,
+/// until the body with every kept branch is within the factor). The others are removed
 /// from `body.points` and `members` and returned, one branch per cut bone; their joints stay in `body.joints`.
 /// `childHeads` and `height` as for boneAxis and fitFrame. `axisJoints` takes the body's joints that still count
 /// for its axis (all of them but the cut bones).

@@ -188,9 +188,9 @@ void reportStray(const std::vector<StrayVertices>& stray, const std::string& mod
                                 std::to_string(s.vertices) + " of the " + std::to_string(s.boneVertices) +
                                     " vertices of bone \"" + s.joint + "\" and the bones hanging from it lie " +
                                     centimetres(s.nearestM) + "-" + centimetres(s.farthestM) + " cm from joint \"" +
-                                    s.body +
-                                    "\", whose body the bone is merged into for its size: it would make that "
-                                    "body " +
+                                    s.body + "\", whose body the bone is merged into for its size: " +
+                                    (s.together ? "with the branches kept beside it, it would make that body "
+                                                : "it would make that body ") +
                                     growthText(s.growth) + " times the volume of its own bones' (at most " +
                                     growthText(maxGrowth) + "); no body is fitted to them (rules: maxMergeGrowth)");
             continue;

@@ -1,9 +1,9 @@
 // afb gen's maxMergeGrowth rule: a bone too small for a body of its own joins an ancestor's body, but a braid, a
 // strap or a plume hanging off that body would stretch its shape over everything the bone reaches. Such a bone's
 // vertices join the body only while the body stays within GenRules::maxMergeGrowth of the volume fitted to its own
-// bones. A branch cut from it becomes a body of its own when the size rules would give it one (an arm merged into
-// the chest for its small volume); otherwise its vertices are left out of every body and reported, as stray
-// vertices are (docs/cli.md, afb gen).
+// bones, each branch judged alone and then the branches kept together. A branch cut from it becomes a body of its own
+// when the size rules would give it one (an arm merged into the chest for its small volume); otherwise its vertices are
+// left out of every body and reported, as stray vertices are (docs/cli.md, afb gen).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -52,6 +52,7 @@ void leaveOut(const Rig& rig, const BodyFit& body, const CutBranch& branch, Vert
     r.joint = rig.joints[static_cast<std::size_t>(branch.bone)].name;
     r.body = namingJoint(rig, body).name;
     r.growth = branch.growth;
+    r.together = branch.together;
     r.nearestM = INFINITY;
     for (const Member& m : branch.members) {
         const Eigen::Vector3d& p = rig.surfaces[m.surface].vertices[m.vertex].position;
@@ -123,52 +124,131 @@ void settleBranches(const Rig& rig, const GenRules& rules, const BodySizing& siz
     }
 }
 
+namespace {
+
+// One body as the maxMergeGrowth rule sees it: its own bones (ownJoints) and their vertices, and the vertices of
+// each of its joints.
+struct MergeJudge {
+    const Rig& rig;
+    const GenRules& rules;
+    const std::vector<int>& childHeads;
+    double height = 0;
+    const BodyFit& body;
+    std::set<int> own;
+    std::map<int, std::vector<Eigen::Vector3d>> pointsOf;
+    std::vector<Eigen::Vector3d> ownPoints;
+    double ownVolume = 0;
+
+    int parentOf(int j) const { return rig.joints[static_cast<std::size_t>(j)].parent; }
+    bool small(int j) const { return !own.count(j); }
+    bool hasPoints(int j) const { return pointsOf.count(j) && !pointsOf.at(j).empty(); }
+    // The volume of the body fitted to its own bones' vertices and those of `merged`, in that order.
+    double volume(const std::vector<int>& merged) const {
+        std::set<int> joints = own;
+        std::vector<Eigen::Vector3d> points = ownPoints;
+        for (int j : merged) {
+            joints.insert(j);
+            if (hasPoints(j)) points.insert(points.end(), pointsOf.at(j).begin(), pointsOf.at(j).end());
+        }
+        return fittedVolume(rig, body.head, childHeads, joints, std::move(points), height, rules.shapes);
+    }
+    bool withinLimit(double v) const { return v <= rules.maxMergeGrowth * ownVolume; }
+};
+
+// A bone where a branch is cut: the body's growth with it (alone, or with every branch kept at the time) and
+// whether the branches' combined growth cut it.
+struct CutRoot {
+    double growth = 0;
+    bool together = false;
+};
+
+// Branches whose growth alone lies within this fraction of the largest are cut together: a mirrored rig's left and
+// right alike, and a hand-made model's (dwarf.x's braids: bone for bone, 5 to 9 % apart).
+constexpr double kTogether = 0.1;
+
+// The merged bones cut from the body, each → the root its branch was cut at: a root and every merged bone hanging
+// from one. Parents before children (joint order).
+std::map<int, int> cutBones(const MergeJudge& m, const std::map<int, CutRoot>& roots) {
+    std::map<int, int> cutAt;
+    for (int j : m.body.joints) {
+        if (!m.small(j)) continue;
+        if (cutAt.count(m.parentOf(j))) cutAt[j] = cutAt[m.parentOf(j)];
+        else if (roots.count(j)) cutAt[j] = j;
+    }
+    return cutAt;
+}
+
+// Each merged bone judged with the merged bones between it and the body's own (not with its siblings' branches,
+// so that left and right come out alike), parents first; a bone hanging from a cut bone is cut with it, a bone
+// without vertices follows its parent (it only turns the body's axis). Returns the roots cut; `keptGrowth` takes
+// the growth of each bone kept that has vertices.
+std::map<int, CutRoot> judgeAlone(const MergeJudge& m, std::map<int, double>& keptGrowth) {
+    std::map<int, CutRoot> roots;
+    std::set<int> cut;
+    for (int j : m.body.joints) {
+        if (!m.small(j)) continue;
+        if (cut.count(m.parentOf(j))) {
+            cut.insert(j);
+            continue;
+        }
+        if (!m.hasPoints(j)) continue;
+        std::vector<int> chain;
+        for (int a = j; m.small(a); a = m.parentOf(a)) chain.push_back(a);
+        const double volume = m.volume(chain);
+        if (m.withinLimit(volume)) {
+            keptGrowth[j] = volume / m.ownVolume;
+        } else {
+            cut.insert(j);
+            roots[j] = {volume / m.ownVolume, false};
+        }
+    }
+    return roots;
+}
+
+// The branches kept together: while the body with every kept merged bone is past the limit, the kept bones that
+// grow it most alone are cut, together with those within kTogether of the most, each with the bones hanging from
+// it (a branch cut below it included).
+void judgeTogether(const MergeJudge& m, std::map<int, double> keptGrowth, std::map<int, CutRoot>& roots) {
+    for (;;) {
+        const std::map<int, int> cutAt = cutBones(m, roots);
+        for (auto it = keptGrowth.begin(); it != keptGrowth.end();)
+            it = cutAt.count(it->first) ? keptGrowth.erase(it) : std::next(it);
+        if (keptGrowth.empty()) return;
+        std::vector<int> kept;
+        for (int j : m.body.joints)
+            if (m.small(j) && !cutAt.count(j)) kept.push_back(j);
+        const double volume = m.volume(kept);
+        if (m.withinLimit(volume)) return;
+        double most = 0;
+        for (const auto& entry : keptGrowth) most = std::max(most, entry.second);
+        for (const auto& entry : keptGrowth)
+            if (entry.second >= most - kTogether * most) roots[entry.first] = {volume / m.ownVolume, true};
+    }
+}
+
+} // namespace
+
 std::vector<CutBranch> limitMergeGrowth(const Rig& rig, const GenRules& rules, const std::vector<bool>& mergedSmall,
                                         const std::vector<int>& childHeads, double height, BodyFit& body,
                                         std::vector<Member>& members, std::vector<int>& axisJoints) {
     axisJoints = body.joints;
-    const auto parentOf = [&](int j) { return rig.joints[static_cast<std::size_t>(j)].parent; };
-    const std::set<int> own = ownJoints(rig, mergedSmall, childHeads, body);
-    const auto small = [&](int j) { return !own.count(j); };
-    if (!(rules.maxMergeGrowth > 0) || own.size() == body.joints.size()) return {};
+    MergeJudge m{rig, rules, childHeads, height, body, ownJoints(rig, mergedSmall, childHeads, body), {}, {}, 0};
+    if (!(rules.maxMergeGrowth > 0) || m.own.size() == body.joints.size()) return {};
     // The body's own vertices: those its other bones weigh most. Too few to fit a shape to, and the rule stands aside.
-    std::map<int, std::vector<Eigen::Vector3d>> pointsOf;
-    for (const Member& m : members) pointsOf[m.joint].push_back(rig.surfaces[m.surface].vertices[m.vertex].position);
-    std::vector<Eigen::Vector3d> ownPoints;
-    for (int j : own) ownPoints.insert(ownPoints.end(), pointsOf[j].begin(), pointsOf[j].end());
-    if (ownPoints.size() < static_cast<std::size_t>(std::max(4, rules.minVertices))) return {};
-    const double ownVolume = fittedVolume(rig, body.head, childHeads, own, ownPoints, height, rules.shapes);
-    // Parents before children (joint order), each bone judged with the merged bones between it and the body's own
-    // (not with its siblings' branches, so that left and right come out alike). A bone hanging from a bone left out
-    // is left out with it; a bone without vertices follows its parent (it only turns the body's axis).
-    std::set<int> kept = own;
-    std::map<int, int> cutAt; // a left-out bone → the bone where its branch was cut
+    for (const Member& mb : members)
+        m.pointsOf[mb.joint].push_back(rig.surfaces[mb.surface].vertices[mb.vertex].position);
+    for (int j : m.own)
+        if (m.hasPoints(j)) m.ownPoints.insert(m.ownPoints.end(), m.pointsOf[j].begin(), m.pointsOf[j].end());
+    if (m.ownPoints.size() < static_cast<std::size_t>(std::max(4, rules.minVertices))) return {};
+    m.ownVolume = m.volume({});
+    std::map<int, double> keptGrowth;
+    std::map<int, CutRoot> roots = judgeAlone(m, keptGrowth);
+    judgeTogether(m, std::move(keptGrowth), roots);
+    if (roots.empty()) return {};
+    const std::map<int, int> cutAt = cutBones(m, roots);
     std::vector<CutBranch> cut;
-    for (int j : body.joints) {
-        if (!small(j)) continue;
-        if (cutAt.count(parentOf(j))) {
-            cutAt[j] = cutAt[parentOf(j)];
-            continue;
-        }
-        if (pointsOf[j].empty()) {
-            kept.insert(j);
-            continue;
-        }
-        std::set<int> trialJoints = own;
-        std::vector<Eigen::Vector3d> trial = ownPoints;
-        for (int a = j; small(a); a = parentOf(a)) {
-            trialJoints.insert(a);
-            trial.insert(trial.end(), pointsOf[a].begin(), pointsOf[a].end());
-        }
-        const double volume = fittedVolume(rig, body.head, childHeads, trialJoints, trial, height, rules.shapes);
-        if (volume <= rules.maxMergeGrowth * ownVolume) {
-            kept.insert(j);
-        } else {
-            cutAt[j] = j;
-            cut.push_back({j, volume / ownVolume, {}, {}});
-        }
-    }
-    if (cut.empty()) return {};
+    for (const auto& [bone, root] : roots)
+        if (cutAt.at(bone) == bone) cut.push_back({bone, root.growth, root.together, {}, {}});
     const auto branchOf = [&](int bone) {
         return std::find_if(cut.begin(), cut.end(), [&](const CutBranch& b) { return b.bone == bone; });
     };
@@ -176,17 +256,19 @@ std::vector<CutBranch> limitMergeGrowth(const Rig& rig, const GenRules& rules, c
     // The left-out vertices go with the bone where their branch was cut.
     std::vector<Member> staying;
     body.points.clear();
-    for (const Member& m : members) {
-        const auto at = cutAt.find(m.joint);
+    for (const Member& mb : members) {
+        const auto at = cutAt.find(mb.joint);
         if (at == cutAt.end()) {
-            staying.push_back(m);
-            body.points.push_back(rig.surfaces[m.surface].vertices[m.vertex].position);
+            staying.push_back(mb);
+            body.points.push_back(rig.surfaces[mb.surface].vertices[mb.vertex].position);
         } else {
-            branchOf(at->second)->members.push_back(m);
+            branchOf(at->second)->members.push_back(mb);
         }
     }
     members = std::move(staying);
-    axisJoints.assign(kept.begin(), kept.end());
+    axisJoints.clear();
+    for (int j : body.joints)
+        if (!cutAt.count(j)) axisJoints.push_back(j);
     return cut;
 }
 

@@ -58,10 +58,11 @@ struct GenRules {
     /// minVolumeRatio) adds its vertices to that body only while the body, fitted to its own bones' vertices and those
     /// of the merged bones between it and them, stays within this factor of the volume fitted to its own bones'
     /// alone (its own: the bones not merged for their size, and merged links to a body hanging from it). A bone
-    /// that would grow it more (a braid or strap hanging off the head) is cut with every bone hanging from it. A cut
-    /// branch big enough for a body of its own (minVertices, minVertexFraction, minBodyFraction) becomes one, jointed
-    /// to that body; a smaller one's vertices are left out of every body and reported as stray (see
-    /// StrayVertices::growth). 0 turns the rule off.
+    /// that would grow it more (a braid or strap hanging off the head) is cut with every bone hanging from it. While
+    /// the body with every kept bone is past the factor, the kept bones that grow it most alone are cut, with those
+    /// within 10 % of their growth (a left and a right braid together). A cut branch big enough for a body of its own
+    /// (minVertices, minVertexFraction, minBodyFraction) becomes one, jointed to that body; a smaller one's vertices
+    /// are left out of every body and reported as stray (see StrayVertices::growth). 0 turns the rule off.
     double maxMergeGrowth = 1.6;
     /// A prop modelled onto a bone's own skin (a horned helmet on the head bone): the vertices of one of a body's own
     /// bones (as maxMergeGrowth counts them, with at least 8 vertices) farther from the bone than propRadius × their
@@ -128,6 +129,9 @@ struct StrayVertices {
     /// maxMergeGrowth: the body's volume with them over its own bones' volume; maxPropGrowth: over the volume
     /// without them (0 for the other rules)
     double growth = 0;
+    /// maxMergeGrowth: cut because the branches kept together grew the body past the limit, each within it alone
+    /// (`growth` is then the body's with every branch kept at that point)
+    bool together = false;
 };
 
 /// Which vertices (per surface, per vertex) no body is fitted to, by the skipSurfaces and strayFactor rules, and
