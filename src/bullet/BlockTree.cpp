@@ -161,7 +161,13 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent, bo
         m_steps.push_back({m_dim[k], p < 0 ? 0 : m_dim[q], m_offset[k], p < 0 ? 0 : m_offset[q], m_diagAt[k],
                            m_edgeAt[k], m_gainAt[k]});
     }
+    layPaths();
+    return true;
+}
+
+void BlockTree::layPaths() {
     // Each node's way to its root in steps: a parent's step comes after its children's.
+    const std::size_t n = m_order.size();
     std::vector<int> stepOf(n);
     for (std::size_t k = 0; k < n; ++k) stepOf[static_cast<std::size_t>(m_order[k])] = static_cast<int>(k);
     m_pathOf.resize(n);
@@ -171,7 +177,6 @@ bool BlockTree::reset(std::span<const int> dims, std::span<const int> parent, bo
         for (int j = static_cast<int>(i); j >= 0; j = m_parent[static_cast<std::size_t>(j)])
             path.push_back(stepOf[static_cast<std::size_t>(j)]);
     }
-    return true;
 }
 
 namespace {

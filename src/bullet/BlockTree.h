@@ -55,6 +55,7 @@ class BlockTree {
         int dim, parentDim, offset, parentOffset;
         std::size_t diagAt, edgeAt, gainAt;
     };
+    void layPaths(); // m_pathOf, from m_order and m_parent (reset())
     void forwardAt(const Step& s, double* x) const;
     void backward(double* x) const;
     std::vector<Step> m_steps;
