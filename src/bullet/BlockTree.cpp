@@ -291,7 +291,7 @@ bool BlockTree::factor() {
     return true;
 }
 
-// Inlined into both solves (a call per node cost the dense solve of the joints 2 % more).
+// Inlined into both solves (out of line, a call per node made `default` 0.7 % dearer).
 [[gnu::always_inline]] inline void BlockTree::forwardAt(const Step& s, double* x) const {
     // Forward (L z = b) and diagonal (w = D⁻¹ z) at one node, which hands its part to its parent. A node whose
     // part is still zero hands nothing.
