@@ -79,6 +79,9 @@ double boneDistance(const Rig& rig, int joint, const Eigen::Vector3d& p);
 
 /// The median of `values` (at least one).
 double median(std::vector<double> values);
+/// The fewest vertices of a bone whose distances' median the stray and prop rules judge by (fewer give no meaningful
+/// median: such a bone is left as it is).
+constexpr std::size_t kMinMedianVertices = 8;
 
 /// The maxPropGrowth rule on one body (GenRules::maxPropGrowth): for each of its `own` bones with at least 8
 /// members, the vertices farther from the bone than GenRules::propRadius times their median distance are removed

@@ -12,7 +12,6 @@
 namespace afb::gen::detail {
 namespace {
 
-constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median (as strayFactor's)
 // A prop is a minority of its bone's vertices: when more than this share lie past the radius, they are the bone's
 // own skin (a bone whose cluster is a chain of blocks, a weapon's L-shaped body) and none is left out.
 constexpr double kMaxPropShare = 0.25;
@@ -77,7 +76,7 @@ void trimProps(const Rig& rig, const GenRules& rules, const std::set<int>& own, 
     double whole = -1; // fitted on demand: most bodies have no far vertex
     std::vector<bool> dropped(members.size(), false);
     for (const auto& [joint, indices] : mine) {
-        if (indices.size() < kMinBoneVertices) continue;
+        if (indices.size() < kMinMedianVertices) continue;
         Far far = farVertices(rig, rules, joint, members, indices);
         if (far.members.empty() ||
             static_cast<double>(far.members.size()) > kMaxPropShare * static_cast<double>(indices.size()))

@@ -47,8 +47,7 @@ namespace {
 
 using detail::median;
 
-constexpr std::size_t kMinBoneVertices = 8; // fewer give no meaningful median
-constexpr double kMadToSigma = 1.4826;      // the median absolute deviation of a normal distribution, in σ
+constexpr double kMadToSigma = 1.4826; // the median absolute deviation of a normal distribution, in σ
 // A vertex this close to its bone's median distance, as a fraction of the model's height, is never stray: a bone
 // whose skin hugs it (a median near zero) would otherwise lose its next ring of vertices.
 constexpr double kMinStrayFraction = 0.1;
@@ -129,7 +128,7 @@ std::vector<std::vector<bool>> strayVertices(const Rig& rig, const GenRules& rul
     const double height = modelHeight(rig);
     for (std::size_t j = 0; j < n; ++j) {
         std::vector<Sample>& samples = byJoint[j];
-        if (samples.size() < kMinBoneVertices) continue;
+        if (samples.size() < detail::kMinMedianVertices) continue;
         // The bone: segments from its joint to each child joint, or its joint alone.
         for (Sample& sample : samples)
             sample.distance = detail::boneDistance(rig, static_cast<int>(j),
