@@ -9,7 +9,7 @@ cmake --preset release >/dev/null
 cmake --build --preset release --target afb afb-double
 methods=(
   raw raw:substeps=2 raw:substeps=4 raw:iterations=20 # plain Bullet, and its own two levers
-  legacy fast iterative default accurate              # the presets (docs/methods.md; exact is default)
+  legacy fast balanced iterative default accurate     # the presets (docs/methods.md; exact is default)
   default:substeps=2 iterative:position-iterations=2  # a preset with more steps; Bullet's iterations, 2 sweeps
   multibody multibody:substeps=2                      # the reduced-coordinate backend (docs/methods.md)
 )

@@ -18,7 +18,7 @@ struct ChartCli {
     std::filesystem::path base = ".";
     std::vector<std::string> entities;
     // exact is the default; the iterative default it replaced stays on the front.
-    std::vector<std::string> methods = {"raw", "legacy", "fast", "iterative", "default", "accurate"};
+    std::vector<std::string> methods = {"raw", "legacy", "fast", "balanced", "iterative", "default", "accurate"};
     sim::ChartOptions chart;
     std::filesystem::path out = "chart";
     std::string precision;

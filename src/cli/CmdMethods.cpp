@@ -22,6 +22,8 @@ std::string_view presetSummary(std::string_view name) {
     if (name == "fast")
         return "the default's direct joint solve in block mode: 2 iterations, 2 position sweeps, an anchor tree "
                "step; the cheap one";
+    if (name == "balanced")
+        return "the default in block mode: 3 iterations; about the default's accuracy for three quarters of its cost";
     if (name == "iterative")
         return "the default without the direct joint solve (what a world without a RagdollSolver runs)";
     if (name == "default")

@@ -17,7 +17,7 @@ struct StressCli {
     // Every preset, the multibody backend included. Every method is judged on its physics alone; default+rest is
     // the default as the library spawns a ragdoll (SpawnOptions::comeToRest, the engine's rest rules), the verdict
     // a game sees.
-    std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "iterative",
+    std::vector<std::string> methods = {"raw",     "legacy",       "fast",     "balanced", "iterative",
                                         "default", "default+rest", "accurate", "multibody"};
     std::vector<std::string> scenarios;
     std::filesystem::path out = "stress";

@@ -11,7 +11,7 @@
 //   BM_LodSwitch       one humanoid of a world of 100 (default method), 0.5 s into its fall: µs to switch it to
 //                      LOD 6 (Ragdoll::setLod) and back (setFullDetail), timed apart
 // Methods: raw (plain Bullet's defaults: 10 iterations), raw:iterations=20 (equal iterations: afbullet's presets
-// solve contacts and joints with 20), default, iterative (the previous default: default with
+// solve contacts and joints with 20), default, balanced (the default in block mode), iterative (default with
 // direct-joints off, position-tree 0, friction-directions 1), fast; BM_Drop also `floor` (floorMethod()). After the
 // runs, a table of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction
 // counts, exact from run to run, come from cmake/callgrind-cost.sh.
@@ -68,6 +68,7 @@ std::vector<Labelled> methods() {
     return {{"raw", afb::sim::rawMethod()},
             {"raw:iterations=20", rawEqual},
             {"default", *afb::bullet::methodPreset("default")},
+            {"balanced", *afb::bullet::methodPreset("balanced")},
             {"iterative", *afb::bullet::methodPreset("iterative")},
             {"fast", *afb::bullet::methodPreset("fast")}};
 }

@@ -45,7 +45,7 @@ TEST_CASE("figure block: the knobs have their names, ranges and preset values", 
     CHECK_FALSE(afb::bullet::setKnob(m, *sweeps, "0").empty()); // at least one sweep
     CHECK(afb::bullet::iterativeJoints(m).figureIterations == 0);
     for (const std::string_view name : afb::bullet::methodPresetNames())
-        CHECK(afb::bullet::methodPreset(name)->figureIterations == (name == "fast" ? 2 : 0));
+        CHECK(afb::bullet::methodPreset(name)->figureIterations == (name == "balanced" ? 3 : name == "fast" ? 2 : 0));
 }
 
 TEST_CASE("figure block: a plate landing on four corners under a heavy block stops in one iteration",

@@ -157,8 +157,8 @@ struct Method {
     /// product over those rows instead of a pass over every body of the figure per row, so contacts and limits
     /// converge within each iteration and few iterations are needed. A game's bodies in the same island are solved
     /// in these iterations too; rows between a game's bodies alone then take the rest of the world's iterations.
-    /// Motors are soft rows of the same solve. 2 in fast, off (0) in the other presets (docs/methods.md has its
-    /// measurements).
+    /// Motors are soft rows of the same solve. 2 in fast, 3 in balanced, off (0) in the other presets
+    /// (docs/methods.md has its measurements).
     int figureIterations = 0;
     /// Gauss–Seidel sweeps over the block in each iteration of block mode (figureIterations); they stop early once
     /// no row's velocity changes by more than the square root of solverTolerance.
@@ -202,7 +202,8 @@ struct Method {
 };
 
 /// The named presets: "fast" (the default's direct joint solve in block mode: 2 iterations, 2 position sweeps, a tree
-/// step over the anchors), "iterative" (the default's knobs with Bullet's iterative joint solve, iterativeJoints),
+/// step over the anchors), "balanced" (the default in block mode, 3 iterations), "iterative" (the default's knobs
+/// with Bullet's iterative joint solve, iterativeJoints),
 /// "default", "accurate", "exact" (the default's method under its earlier name, which recorded results still carry),
 /// "legacy" (afbullet 0.1's method: Bullet's solver with 20 joint iterations and none of the techniques above, kept for
 /// comparison) and "multibody" (the reduced-coordinate backend, one step per frame, 20 iterations, speculative limits).
