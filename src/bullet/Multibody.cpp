@@ -80,20 +80,6 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
         });
     m_angularVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
     m_linearVelocity.assign(f.bodies.size(), btVector3(0, 0, 0));
-    // Damping: the rigid backend scales each body's velocities by (1 − d)^dt per step (btRigidBody's model). In
-    // reduced coordinates the same factor on every generalised velocity scales every body's linear and angular
-    // velocity alike: exact when the figure has one damping (every bundled and corpus figure: the §3.4 friction
-    // of settings), otherwise the mass-weighted mean.
-    double mass = 0, linear = 0, angular = 0;
-    for (const figure::FigureBody& b : f.bodies) {
-        mass += b.massKg;
-        linear += b.massKg * b.linearDamping;
-        angular += b.massKg * b.angularDamping;
-    }
-    if (mass > 0) {
-        m_linearDamping = static_cast<btScalar>(linear / mass);
-        m_angularDamping = static_cast<btScalar>(angular / mass);
-    }
     m_positionIterations = std::max(0, options.method.positionIterations);
     m_action = std::make_unique<Action>(*this, options.comeToRest);
     for (const figure::FigureConstraint& c : f.constraints)
@@ -101,6 +87,7 @@ MultibodyRagdoll::MultibodyRagdoll(std::shared_ptr<const RagdollAsset> asset, bt
                               c.body2 >= 0 ? toBt(c.frameInBody2) : m_spawn * toBt(c.frameInBody2));
     const std::vector<MultibodyJointParts> joints = jointParts();
     layoutTrees(joints);
+    meanDamping();
     for (Part& p : m_parts) buildTree(p, options);
     addColliders(options);
     addConstraints(options.method, joints);
@@ -134,6 +121,28 @@ void MultibodyRagdoll::refreshTransforms(btMultiBody& body) {
     btAlignedObjectArray<btVector3> o;
     body.forwardKinematics(q, o);
     body.updateCollisionObjectWorldTransforms(q, o);
+}
+
+// Damping: the rigid backend scales each body's velocities by (1 − d)^dt per step (btRigidBody's model). In reduced
+// coordinates the same factor on every generalised velocity scales every body's linear and angular velocity alike:
+// exact when the figure's moving bodies have one damping (every bundled and corpus figure: the §3.4 friction of
+// settings), otherwise their mass-weighted mean. A base fixed to the world does not move and does not count (a
+// frictionless bar hung from a fixed body with the settings' friction swings undamped, as on the rigid backend).
+void MultibodyRagdoll::meanDamping() {
+    const figure::Figure& f = m_asset->figure();
+    double mass = 0, linear = 0, angular = 0;
+    for (std::size_t i = 0; i < f.bodies.size(); ++i) {
+        const BodyRef& ref = m_bodies[i];
+        if (ref.link < 0 && m_parts[static_cast<std::size_t>(ref.part)].fixedBase) continue;
+        const figure::FigureBody& b = f.bodies[i];
+        mass += b.massKg;
+        linear += b.massKg * b.linearDamping;
+        angular += b.massKg * b.angularDamping;
+    }
+    if (mass > 0) {
+        m_linearDamping = static_cast<btScalar>(linear / mass);
+        m_angularDamping = static_cast<btScalar>(angular / mass);
+    }
 }
 
 void MultibodyRagdoll::dampVelocities(btScalar dt) {

@@ -171,6 +171,7 @@ class MultibodyRagdoll {
 
     // Multibody.cpp
     void refreshTransforms(btMultiBody& body);
+    void meanDamping();
     void dampVelocities(btScalar dt);
     /// Every body's velocity on its collider (btCollisionObject's interpolation velocities, which Bullet leaves
     /// unused for a link collider), where the collision algorithms and the speculative reach read a body's motion
