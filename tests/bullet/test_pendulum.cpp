@@ -6,12 +6,12 @@
 // the inertia the swing sees, shows here. Deterministic: fixed 60 Hz step, no ground.
 #include <catch2/catch.hpp>
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "FigureFixture.h"
 #include "afb/bullet/Method.h"
@@ -30,8 +30,9 @@ constexpr double kEngineStepS = 0.016;
 // `top`, an 8-unit cube fixed to the world at (0, 0, 104), and `arm`, a 20 × 2 × 2-unit bar along +X from the hinge's
 // anchor at (0, 0, 100), turning about Y, with air friction `airFriction` (linear and angular) on the bar.
 afb::figure::Figure pendulumFigure(const std::string& airFriction) {
-    const std::vector<afb::test::TestJoint> joints = {
-        {"origin", -1, 0, 0, 0}, {"top", 0, 0, 0, 104}, {"arm", 1, 0, 0, 100}};
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                      {"top", 0, 0, 0, 104},
+                                                      {"arm", 1, 0, 0, 100}};
     const auto built = afb::test::buildTestFigure(
         "articulatedFigure t {\n settings { selfCollision 0 }\n"
         " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
