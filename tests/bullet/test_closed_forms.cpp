@@ -23,27 +23,17 @@
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kUnit = 0.0254;
+using afb::test::methods::kUnit;
 constexpr double kG = 9.81;
 constexpr double kHz = 60.0;
 constexpr double kEngineStepS = 0.016;
 
-// `top`, an 8-unit cube fixed to the world at (0, 0, 104), and `arm`, a 20 × 2 × 2-unit bar along +X from the hinge's
-// anchor at (0, 0, 100), turning about Y, with air friction `airFriction` (linear and angular) on the bar.
+// buildArmFigure's pendulum (FigureFixture.h) on a frictionless hinge about Y, with air friction `airFriction` (linear
+// and angular) on the bar.
 afb::figure::Figure pendulumFigure(const std::string& airFriction) {
-    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
-                                                      {"top", 0, 0, 0, 104},
-                                                      {"arm", 1, 0, 0, 100}};
-    const auto built = afb::test::buildTestFigure(
-        "articulatedFigure t {\n settings { selfCollision 0 }\n"
-        " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, 104 ) density 0.1 }\n"
-        " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, 100 ) density 0.2 "
-        "friction " +
-            airFriction + ", " + airFriction +
-            ", 0.8 }\n"
-            " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n"
-            " hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) axis ( 0, 1, 0 ) friction 0 }\n}\n",
-        joints);
+    const auto built = afb::test::buildArmFigure(
+        "hinge \"h\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) axis ( 0, 1, 0 ) friction 0 }",
+        "friction " + airFriction + ", " + airFriction + ", 0.8");
     INFO(built.diagnostics.str());
     REQUIRE(built.figure);
     return *built.figure;

@@ -78,15 +78,18 @@ inline BuiltFigure buildTestFigure(const std::string& afText, const std::vector<
 
 /// The one-arm pendulum the method and multibody tests drive into their limits: `top`, an 8-unit cube fixed to
 /// the world at (0, 0, 104), and `arm`, a 20-unit box along +X from the anchor (0, 0, 100), joined by `constraint`
-/// (an .af constraint block between "arm" and "top"). Skeleton origin, top, arm with identity orientations.
-inline BuiltFigure buildArmFigure(const std::string& constraint) {
+/// (an .af constraint block between "arm" and "top"), `armSettings` added to the arm's body block (e.g. its friction).
+/// Skeleton origin, top, arm with identity orientations.
+inline BuiltFigure buildArmFigure(const std::string& constraint, const std::string& armSettings = "") {
     const std::vector<TestJoint> joints = {{"origin", -1, 0, 0, 0}, {"top", 0, 0, 0, 104}, {"arm", 1, 0, 0, 100}};
     return buildTestFigure("articulatedFigure t {\n settings { selfCollision 0 }\n"
                            " body \"top\" { joint \"origin\" model box( ( -4, -4, -4 ), ( 4, 4, 4 ) ) origin ( 0, 0, "
                            "104 ) density 0.1 }\n"
                            " body \"arm\" { joint \"arm\" model box( ( 0, -1, -1 ), ( 20, 1, 1 ) ) origin ( 0, 0, "
-                           "100 ) density 0.2 }\n"
-                           " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
+                           "100 ) density 0.2 " +
+                               armSettings +
+                               " }\n"
+                               " fixed \"mount\" { body1 \"top\" body2 \"world\" }\n " +
                                constraint + "\n}\n",
                            joints);
 }
