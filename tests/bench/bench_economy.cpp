@@ -3,6 +3,8 @@
 //   BM_Drop/<method>   16 humanoids dropped 1 m, 300 steps at 60 Hz, sleeping off (the chart's scene, every body
 //                      awake): CPU µs per awake body-step (counter us_per_awake_body_step)
 //   BM_Rest/<method>   160 humanoids dropped 1 m, 10 s, sleeping on: CPU µs per body-step, awake or not
+//   BM_RestTumbled/<method>  the same, each humanoid turned and tipped at random (seeded, as `afb drop --seed 1`):
+//                      they land on their sides and backs instead of their feet
 //   BM_Crowd/<method>/<resting>  10 humanoids dropped 1 m (kept awake: comeToRest off) beside <resting> humanoids
 //                      spawned at rest (standing on the ground, never touched), 120 steps: CPU µs per step
 //                      (counter us_per_step)
@@ -16,10 +18,13 @@
 // runs, a table of the ratios to raw is printed. Time is thread CPU time (other processes do not count); instruction
 // counts, exact from run to run, come from cmake/callgrind-cost.sh.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -85,22 +90,47 @@ Method floorMethod() {
     return m;
 }
 
-/// `count` humanoids on a grid, 37° apart in yaw, the lowest point `heightM` above the ground.
+/// The figure's lowest point turned by `turn` (model space).
+double lowestPoint(const afb::figure::Figure& figure, const btQuaternion& turn) {
+    const btMatrix3x3 m(turn);
+    Eigen::Matrix3d r;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r(i, j) = double(m[i][j]);
+    double lowest = 1e9;
+    for (const afb::figure::FigureBody& b : figure.bodies)
+        for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, (r * b.loadPose.apply(v)).z());
+    return lowest;
+}
+
+/// How the dropped humanoids are turned: 37° apart in yaw, upright; or `tumbled`, at a random yaw and tipped by up
+/// to 90° about a random horizontal axis (the distribution and seed of `afb drop --seed 1`).
+enum class Turn { Upright, Tumbled };
+
+/// `count` humanoids on a grid, the lowest point `heightM` above the ground.
 struct Drop {
     afb::sim::Scene scene;
-    Drop(const Method& method, int count, double heightM, bool sleeping, int resting = 0) : scene(method) {
+    Drop(const Method& method, int count, double heightM, bool sleeping, int resting = 0, Turn turn = Turn::Upright)
+        : scene(method) {
         const auto asset = humanoid();
         const double spacing = 2.5;
         const int columns = 13;
-        double lowest = 1e9; // the load pose's lowest point, model space
-        for (const afb::figure::FigureBody& b : asset->figure().bodies)
-            for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, b.loadPose.apply(v).z());
+        std::mt19937 rng(1);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
         for (int i = 0; i < count; ++i) {
+            btQuaternion q(btVector3(0, 0, 1), btScalar(0.6458 * i));
+            if (turn == Turn::Tumbled) {
+                const double yaw = unit(rng) * 2 * std::numbers::pi, tilt = unit(rng) * std::numbers::pi / 2,
+                             tiltDir = unit(rng) * 2 * std::numbers::pi;
+                q = btQuaternion(btVector3(btScalar(std::cos(tiltDir)), btScalar(std::sin(tiltDir)), 0),
+                                 btScalar(tilt)) *
+                    btQuaternion(btVector3(0, 0, 1), btScalar(yaw));
+            }
+            const double lowest = lowestPoint(asset->figure(), turn == Turn::Tumbled ? q : btQuaternion::getIdentity());
             afb::bullet::SpawnOptions o;
             o.comeToRest = sleeping;
-            o.entityTransform = btTransform(btQuaternion(btVector3(0, 0, 1), btScalar(0.6458 * i)),
-                                            btVector3(btScalar(spacing * (i % columns)),
-                                                      btScalar(spacing * (i / columns)), btScalar(heightM - lowest)));
+            o.entityTransform =
+                btTransform(q, btVector3(btScalar(spacing * (i % columns)), btScalar(spacing * (i / columns)),
+                                         btScalar(heightM - lowest)));
             if (afb::sim::isRaw(method)) scene.spawnRaw(asset, o);
             else scene.spawn(asset, o);
         }
@@ -109,7 +139,8 @@ struct Drop {
             afb::bullet::SpawnOptions o;
             o.startAtRest = true;
             o.entityTransform.setOrigin(
-                btVector3(btScalar(spacing * (i % 40)), btScalar(20 + spacing * (i / 40)), btScalar(-lowest + 0.001)));
+                btVector3(btScalar(spacing * (i % 40)), btScalar(20 + spacing * (i / 40)),
+                          btScalar(-lowestPoint(asset->figure(), btQuaternion::getIdentity()) + 0.001)));
             if (afb::sim::isRaw(method)) scene.spawnRaw(asset, o);
             else scene.spawn(asset, o);
         }
@@ -167,7 +198,7 @@ void dropBenchmark(benchmark::State& state, const Method& method, const char* la
     results()["drop"][label] = perAwake / runs;
 }
 
-void restBenchmark(benchmark::State& state, const Method& method, const char* label) {
+void restBenchmark(benchmark::State& state, const Method& method, const char* label, Turn turn) {
     if (!humanoid()) {
         state.SkipWithError("bundled humanoid not found");
         return;
@@ -176,7 +207,7 @@ void restBenchmark(benchmark::State& state, const Method& method, const char* la
     int runs = 0;
     for (auto _ : state) {
         state.PauseTiming();
-        Drop drop(method, 160, 1.0, true);
+        Drop drop(method, 160, 1.0, true, 0, turn);
         state.ResumeTiming();
         const auto [awake, body] = run(drop, 600);
         perBody += body;
@@ -185,7 +216,7 @@ void restBenchmark(benchmark::State& state, const Method& method, const char* la
     }
     state.counters["us_per_body_step"] = perBody / runs;
     state.counters["us_per_awake_body_step"] = perAwake / runs;
-    results()["rest"][label] = perBody / runs;
+    results()[turn == Turn::Upright ? "rest" : "rest tumbled"][label] = perBody / runs;
 }
 
 void crowdBenchmark(benchmark::State& state, const Method& method, const char* label) {
@@ -314,7 +345,13 @@ void registerAll() {
         ->Unit(benchmark::kMillisecond)
         ->Iterations(1);
     for (const Labelled& m : methods())
-        benchmark::RegisterBenchmark((std::string("BM_Rest/") + m.label).c_str(), restBenchmark, m.method, m.label)
+        benchmark::RegisterBenchmark((std::string("BM_Rest/") + m.label).c_str(), restBenchmark, m.method, m.label,
+                                     Turn::Upright)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1);
+    for (const Labelled& m : methods())
+        benchmark::RegisterBenchmark((std::string("BM_RestTumbled/") + m.label).c_str(), restBenchmark, m.method,
+                                     m.label, Turn::Tumbled)
             ->Unit(benchmark::kMillisecond)
             ->Iterations(1);
     for (const Labelled& m : methods())
@@ -346,8 +383,10 @@ void printRatios() {
                     family == "spawn"     ? "CPU µs to spawn a ragdoll (into a world of 100)"
                     : family == "removal" ? "CPU µs to remove a ragdoll (from a world of 100)"
                     : family == "memory"  ? "heap bytes per live instance, after one step"
-                    : family == "rest"    ? "CPU µs per body-step (160 humanoids, 10 s, sleeping on)"
-                                          : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
+                    : family == "rest"    ? "CPU µs per body-step (160 humanoids dropped upright, 10 s, sleeping on)"
+                    : family == "rest tumbled"
+                        ? "CPU µs per body-step (160 humanoids dropped tumbled, 10 s, sleeping on)"
+                        : "CPU µs per awake body-step (16 humanoids, 300 steps, sleeping off)");
         for (const auto& [label, value] : byLabel)
             std::printf("  %-20s %8.3f  %5.2fx raw\n", label.c_str(), value, value / raw->second);
         const auto equal = byLabel.find("raw:iterations=20");
