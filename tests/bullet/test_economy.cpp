@@ -153,14 +153,6 @@ TEST_CASE("economy: pruned pairs on the corpus figures never touch within the li
 
 namespace {
 
-/// The figure's load pose standing on the ground (its lowest point 1 mm up) at (x, y).
-btTransform standing(const figure::Figure& f, double x, double y) {
-    double lowest = 1e9;
-    for (const figure::FigureBody& b : f.bodies)
-        for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, b.loadPose.apply(v).z());
-    return btTransform(btQuaternion::getIdentity(), btVector3(btScalar(x), btScalar(y), btScalar(0.001 - lowest)));
-}
-
 /// Pairs in the world's pair cache that involve a body of `r`.
 int pairsOf(sim::Scene& scene, const bullet::Ragdoll& r) {
     int n = 0;
@@ -182,7 +174,7 @@ TEST_CASE("economy: a ragdoll spawned at rest stays frozen, costs no pairs or co
     sim::Scene scene(*bullet::methodPreset("default"));
     const int constraintsBefore = scene.world().getNumConstraints();
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& r = scene.spawn(asset, o);
     CHECK(r.atRest());
@@ -208,7 +200,7 @@ TEST_CASE("economy: a frozen ragdoll wakes on an impulse, whole, with its mass a
     sim::Scene scene(*bullet::methodPreset("default"));
     const int constraintsBefore = scene.world().getNumConstraints();
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& r = scene.spawn(asset, o);
     scene.step(1.0 / 60);
@@ -242,7 +234,7 @@ TEST_CASE("economy: a frozen ragdoll wakes when a falling body lands on it", "[b
     const auto asset = bullet::RagdollAsset::create(loaded.figure);
     sim::Scene scene(*bullet::methodPreset("default"));
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& resting = scene.spawn(asset, o);
     // A second humanoid dropped onto the first from half a metre above its head.
@@ -268,7 +260,7 @@ TEST_CASE("economy: a frozen ragdoll with nothing active near sinks behind one b
     sim::Scene scene(*bullet::methodPreset("default"));
     const int objectsBefore = scene.world().getNumCollisionObjects();
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& resting = scene.spawn(asset, o);
     CHECK(scene.world().getNumCollisionObjects() == objectsBefore + resting.rigidBodyCount());
@@ -314,7 +306,7 @@ TEST_CASE("economy: sinking is off in a RagdollWorld unless turned on", "[bullet
     sim::Scene scene(*bullet::methodPreset("default"));
     scene.ragdollWorld().setSinking(false);
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& r = scene.spawn(asset, o);
     for (int s = 0; s < 120; ++s) scene.step(1.0 / 60);
@@ -329,7 +321,7 @@ TEST_CASE("economy: a sunk ragdoll wakes whole on an impulse and is removed clea
     const int objectsBefore = scene.world().getNumCollisionObjects();
     const int constraintsBefore = scene.world().getNumConstraints();
     bullet::SpawnOptions o;
-    o.entityTransform = standing(loaded.figure, 0, 0);
+    o.entityTransform = test::standing(loaded.figure, 0, 0);
     o.startAtRest = true;
     bullet::Ragdoll& r = scene.spawn(asset, o);
     const std::vector<figure::Transform> before = r.bodyTransforms();

@@ -3,9 +3,12 @@
 // does not load.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <string>
+
+#include <LinearMath/btTransform.h>
 
 #include "TestSupport.h"
 #include "afb/decl/Library.h"
@@ -21,6 +24,14 @@ inline figure::LoadedFigure loadEntity(const std::string& entity, const std::fil
     INFO(diags.str());
     REQUIRE(loaded);
     return std::move(*loaded);
+}
+
+/// The figure's load pose upright with its lowest point `height` metres above the ground at (x, y).
+inline btTransform standing(const figure::Figure& f, double x, double y, double height = 0.001) {
+    double lowest = 1e9;
+    for (const figure::FigureBody& b : f.bodies)
+        for (const Eigen::Vector3d& v : b.shape.vertices) lowest = std::min(lowest, b.loadPose.apply(v).z());
+    return btTransform(btQuaternion::getIdentity(), btVector3(btScalar(x), btScalar(y), btScalar(height - lowest)));
 }
 
 } // namespace afb::test
