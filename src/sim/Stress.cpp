@@ -138,122 +138,172 @@ struct GuardReport {
     std::string detail;
 };
 
+// One run's steps and their judgement (runSteps): the worst values and the first failure into the result.
+template <class Doll>
+class Stepper {
+  public:
+    Stepper(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, const StressSetup& setup,
+            const StressThresholds& th, StressResult& r)
+        : m_scene(scene), m_dolls(dolls), m_setup(setup), m_th(th), m_r(r), m_judge{th, r}, m_rest(th),
+          m_g(setup.figures.front().units.gravityMps2), m_dt(1.0 / setup.hz) {
+        for (std::size_t k = 0; k < dolls.size(); ++k)
+            setRigidMotion(*dolls[k], setup.spawns[k].linearVelocity, setup.spawns[k].angularVelocity);
+        m_e0 = totalEnergy(dolls, m_g) + groundAllowanceJ(dolls, m_g);
+        m_impulseDone = !setup.impulse;
+        m_window = framesOf(dolls);
+    }
+
+    // The run: steps until it fails, rests or reaches the end of its time.
+    void run(const GuardReport& guard) {
+        const int steps = static_cast<int>(std::ceil(m_th.restWithinS * m_setup.hz - 1e-9));
+        m_lastSecondFrom = steps - static_cast<int>(std::lround(m_setup.hz));
+        for (int step = 0; step < steps && !m_judge.failed(); ++step) {
+            this->step(step);
+            if (guard.cause) {
+                m_judge.fail(*guard.cause, guard.detail);
+                break;
+            }
+            const bool checkPenetration = m_judge.now > m_th.penetrationAfterS + 1e-9;
+            for (std::size_t k = 0; k < m_dolls.size() && !m_judge.failed(); ++k) {
+                checkBodies(k, step, checkPenetration);
+                checkJoints(k);
+            }
+            if (m_judge.failed()) break;
+            if (checkPenetration) checkContacts();
+            checkEnergy();
+            if (m_judge.failed() || rested()) return;
+        }
+        if (m_judge.failed()) return;
+        if (m_lastSecondSpin > m_th.maxResidualSpinRadps)
+            m_judge.fail(StressCause::Jitter, m_lastSecondSpinBody + " turning at " + fixed(m_lastSecondSpin, 1) +
+                                                  " rad/s in the last second");
+        else m_judge.fail(StressCause::NoRest, "still moving after " + fixed(m_th.restWithinS, 0) + " s");
+    }
+
+  private:
+    // One step of the world (its thread CPU time counted), then the scenario's impulse when it is due.
+    void step(int step) {
+        timespec t0{}, t1{};
+        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+        m_scene.step(m_dt);
+        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+        m_r.cpuMs +=
+            (static_cast<double>(t1.tv_sec - t0.tv_sec) + static_cast<double>(t1.tv_nsec - t0.tv_nsec) * 1e-9) * 1000.0;
+        m_judge.now = m_r.simulatedS = (step + 1) * m_dt;
+        if (m_impulseDone || m_judge.now < m_setup.impulse->atS - 1e-9) return;
+        const double eBefore = totalEnergy(m_dolls, m_g);
+        auto& doll = *m_dolls[m_setup.impulse->instance];
+        const Eigen::Vector3d centre = doll.bodyStates()[static_cast<std::size_t>(m_setup.impulse->body)].pose.position;
+        doll.applyBodyImpulse(m_setup.impulse->body, bullet::toBt(m_setup.impulse->impulseNs), bullet::toBt(centre),
+                              bullet::ImpulseRule::Always);
+        m_externalWork += totalEnergy(m_dolls, m_g) - eBefore;
+        m_impulseDone = true;
+    }
+
+    // Instance k's bodies: finite, not too fast, centres above the ground; their spin for the rest window.
+    void checkBodies(std::size_t k, int step, bool checkPenetration) {
+        const std::vector<figure::BodyState> states = m_dolls[k]->bodyStates();
+        for (std::size_t i = 0; i < states.size(); ++i) {
+            const figure::BodyState& s = states[i];
+            const int body = static_cast<int>(i);
+            if (!(s.pose.position.allFinite() && s.pose.rotation.allFinite() && s.linearVelocity.allFinite() &&
+                  s.angularVelocity.allFinite())) {
+                m_judge.fail(StressCause::NonFinite, bodyLabel(m_dolls, k, body) + " not finite");
+                return;
+            }
+            const double speed = s.linearVelocity.norm(), spin = s.angularVelocity.norm();
+            m_r.maxSpeedMps = std::max(m_r.maxSpeedMps, speed);
+            if (speed > m_th.maxSpeedMps)
+                m_judge.fail(StressCause::Speed, bodyLabel(m_dolls, k, body) + " at " + fixed(speed, 1) + " m/s");
+            const double under = -s.pose.position.z();
+            if (checkPenetration && under > m_th.maxPenetrationM) {
+                m_r.maxPenetrationM = std::max(m_r.maxPenetrationM, under);
+                m_judge.fail(StressCause::Penetration,
+                             bodyLabel(m_dolls, k, body) + " centre " + fixed(under * 100, 1) + " cm under the ground");
+            }
+            if (step >= m_lastSecondFrom && spin > m_lastSecondSpin) {
+                m_lastSecondSpin = spin;
+                m_lastSecondSpinBody = bodyLabel(m_dolls, k, body);
+            }
+            if (m_rest.counts(m_judge.now) && spin > m_rest.worstSpin())
+                m_rest.spin(m_judge.now, spin, bodyLabel(m_dolls, k, body));
+        }
+    }
+
+    // Instance k's joints: anchors together, limits within the thresholds.
+    void checkJoints(std::size_t k) {
+        const Doll& d = *m_dolls[k];
+        for (int c = 0; c < static_cast<int>(d.figure().constraints.size()) && !m_judge.failed(); ++c) {
+            const bullet::JointError e = d.jointError(c);
+            const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
+            const std::string label = m_dolls.size() > 1 ? "#" + std::to_string(k) + " " + name : name;
+            const double limitDeg = e.limitExcessRad * 180.0 / std::numbers::pi;
+            m_r.maxAnchorErrorM = std::max(m_r.maxAnchorErrorM, e.anchorM);
+            m_r.maxLimitOvershootDeg = std::max(m_r.maxLimitOvershootDeg, limitDeg);
+            if (e.anchorM > m_th.maxAnchorErrorM)
+                m_judge.fail(StressCause::Anchor, label + " anchors " + fixed(e.anchorM * 1000, 0) + " mm apart");
+            else if (limitDeg > m_th.maxLimitOvershootDeg)
+                m_judge.fail(StressCause::Limit, label + " " + fixed(limitDeg, 0) + "° past its limit");
+        }
+    }
+
+    // The deepest contact of the scene.
+    void checkContacts() {
+        const ContactDepth deepest = m_scene.deepestContact();
+        m_r.maxPenetrationM = std::max(m_r.maxPenetrationM, deepest.depthM);
+        if (deepest.depthM > m_th.maxPenetrationM)
+            m_judge.fail(StressCause::Penetration, objectLabel(m_scene, m_dolls, deepest.a) + " / " +
+                                                       objectLabel(m_scene, m_dolls, deepest.b) + " " +
+                                                       fixed(deepest.depthM * 100, 1) + " cm deep");
+    }
+
+    // Energy above the start (the highest of the spawn grace), less the impulse's work.
+    void checkEnergy() {
+        const double energy = totalEnergy(m_dolls, m_g);
+        if (m_judge.now <= m_setup.spawnGraceS + 1e-9) m_e0 = std::max(m_e0, energy);
+        const double gain = energy - m_e0 - m_externalWork;
+        m_r.maxEnergyGainJ = std::max(m_r.maxEnergyGainJ, gain);
+        if (gain > m_th.maxEnergyGainJ) m_judge.fail(StressCause::EnergyGain, "+" + fixed(gain, 1) + " J");
+    }
+
+    // Rest: a window of restWindowS over which nothing moved; a body that moved starts a new one now. True when
+    // the run is decided (rested, or still with a body that spins: jitter).
+    bool rested() {
+        const bool still = m_impulseDone && stillSince(m_dolls, m_window, m_th);
+        if (!still) m_window = framesOf(m_dolls);
+        const detail::RestWindow::Verdict verdict = m_rest.update(m_judge.now, still);
+        if (verdict == detail::RestWindow::Verdict::Jitter) {
+            // Still, but a body held in place reports a spin.
+            m_judge.fail(StressCause::Jitter,
+                         m_rest.worstBody() + " turning at " + fixed(m_rest.worstSpin(), 1) + " rad/s while at rest");
+            return true;
+        }
+        if (verdict == detail::RestWindow::Verdict::Rested) {
+            m_r.restAtS = m_rest.start();
+            return true;
+        }
+        return false;
+    }
+
+    Scene& m_scene;
+    const std::vector<std::unique_ptr<Doll>>& m_dolls;
+    const StressSetup& m_setup;
+    const StressThresholds& m_th;
+    StressResult& m_r;
+    Judge m_judge;
+    detail::RestWindow m_rest;
+    const double m_g, m_dt;
+    double m_e0 = 0, m_externalWork = 0, m_lastSecondSpin = 0;
+    bool m_impulseDone = false;
+    int m_lastSecondFrom = 0;
+    std::vector<btTransform> m_window;
+    std::string m_lastSecondSpinBody;
+};
+
 template <class Doll>
 void runSteps(Scene& scene, const std::vector<std::unique_ptr<Doll>>& dolls, const StressSetup& setup,
               const StressThresholds& th, StressResult& r, const GuardReport& guard) {
-    const double g = setup.figures.front().units.gravityMps2;
-    for (std::size_t k = 0; k < dolls.size(); ++k)
-        setRigidMotion(*dolls[k], setup.spawns[k].linearVelocity, setup.spawns[k].angularVelocity);
-    double e0 = totalEnergy(dolls, g) + groundAllowanceJ(dolls, g);
-    double externalWork = 0;
-    bool impulseDone = !setup.impulse;
-    const double dt = 1.0 / setup.hz;
-    const int steps = static_cast<int>(std::ceil(th.restWithinS * setup.hz - 1e-9));
-    const int lastSecondFrom = steps - static_cast<int>(std::lround(setup.hz));
-    double lastSecondSpin = 0;
-    detail::RestWindow rest(th);
-    std::vector<btTransform> window = framesOf(dolls);
-    std::string lastSecondSpinBody;
-    Judge judge{th, r};
-    for (int step = 0; step < steps && !judge.failed(); ++step) {
-        timespec t0{}, t1{};
-        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
-        scene.step(dt);
-        ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
-        r.cpuMs +=
-            (static_cast<double>(t1.tv_sec - t0.tv_sec) + static_cast<double>(t1.tv_nsec - t0.tv_nsec) * 1e-9) * 1000.0;
-        judge.now = r.simulatedS = (step + 1) * dt;
-        if (!impulseDone && judge.now >= setup.impulse->atS - 1e-9) {
-            const double eBefore = totalEnergy(dolls, g);
-            auto& doll = *dolls[setup.impulse->instance];
-            const Eigen::Vector3d centre =
-                doll.bodyStates()[static_cast<std::size_t>(setup.impulse->body)].pose.position;
-            doll.applyBodyImpulse(setup.impulse->body, bullet::toBt(setup.impulse->impulseNs), bullet::toBt(centre),
-                                  bullet::ImpulseRule::Always);
-            externalWork += totalEnergy(dolls, g) - eBefore;
-            impulseDone = true;
-        }
-        if (guard.cause) {
-            judge.fail(*guard.cause, guard.detail);
-            break;
-        }
-        const bool checkPenetration = judge.now > th.penetrationAfterS + 1e-9;
-        for (std::size_t k = 0; k < dolls.size() && !judge.failed(); ++k) {
-            const Doll& d = *dolls[k];
-            const std::vector<figure::BodyState> states = d.bodyStates();
-            for (std::size_t i = 0; i < states.size(); ++i) {
-                const figure::BodyState& s = states[i];
-                const int body = static_cast<int>(i);
-                if (!(s.pose.position.allFinite() && s.pose.rotation.allFinite() && s.linearVelocity.allFinite() &&
-                      s.angularVelocity.allFinite())) {
-                    judge.fail(StressCause::NonFinite, bodyLabel(dolls, k, body) + " not finite");
-                    break;
-                }
-                const double speed = s.linearVelocity.norm(), spin = s.angularVelocity.norm();
-                r.maxSpeedMps = std::max(r.maxSpeedMps, speed);
-                if (speed > th.maxSpeedMps)
-                    judge.fail(StressCause::Speed, bodyLabel(dolls, k, body) + " at " + fixed(speed, 1) + " m/s");
-                const double under = -s.pose.position.z();
-                if (checkPenetration && under > th.maxPenetrationM) {
-                    r.maxPenetrationM = std::max(r.maxPenetrationM, under);
-                    judge.fail(StressCause::Penetration,
-                               bodyLabel(dolls, k, body) + " centre " + fixed(under * 100, 1) + " cm under the ground");
-                }
-                if (step >= lastSecondFrom && spin > lastSecondSpin) {
-                    lastSecondSpin = spin;
-                    lastSecondSpinBody = bodyLabel(dolls, k, body);
-                }
-                if (rest.counts(judge.now) && spin > rest.worstSpin())
-                    rest.spin(judge.now, spin, bodyLabel(dolls, k, body));
-            }
-            for (int c = 0; c < static_cast<int>(d.figure().constraints.size()) && !judge.failed(); ++c) {
-                const bullet::JointError e = d.jointError(c);
-                const std::string& name = d.figure().constraints[static_cast<std::size_t>(c)].name;
-                const std::string label = dolls.size() > 1 ? "#" + std::to_string(k) + " " + name : name;
-                const double limitDeg = e.limitExcessRad * 180.0 / std::numbers::pi;
-                r.maxAnchorErrorM = std::max(r.maxAnchorErrorM, e.anchorM);
-                r.maxLimitOvershootDeg = std::max(r.maxLimitOvershootDeg, limitDeg);
-                if (e.anchorM > th.maxAnchorErrorM)
-                    judge.fail(StressCause::Anchor, label + " anchors " + fixed(e.anchorM * 1000, 0) + " mm apart");
-                else if (limitDeg > th.maxLimitOvershootDeg)
-                    judge.fail(StressCause::Limit, label + " " + fixed(limitDeg, 0) + "° past its limit");
-            }
-        }
-        if (judge.failed()) break;
-        if (checkPenetration) {
-            const ContactDepth deepest = scene.deepestContact();
-            r.maxPenetrationM = std::max(r.maxPenetrationM, deepest.depthM);
-            if (deepest.depthM > th.maxPenetrationM)
-                judge.fail(StressCause::Penetration, objectLabel(scene, dolls, deepest.a) + " / " +
-                                                         objectLabel(scene, dolls, deepest.b) + " " +
-                                                         fixed(deepest.depthM * 100, 1) + " cm deep");
-        }
-        const double energy = totalEnergy(dolls, g);
-        if (judge.now <= setup.spawnGraceS + 1e-9) e0 = std::max(e0, energy);
-        const double gain = energy - e0 - externalWork;
-        r.maxEnergyGainJ = std::max(r.maxEnergyGainJ, gain);
-        if (gain > th.maxEnergyGainJ) judge.fail(StressCause::EnergyGain, "+" + fixed(gain, 1) + " J");
-        if (judge.failed()) break;
-        // Rest: a window of restWindowS over which nothing moved; a body that moved starts a new one now.
-        const bool still = impulseDone && stillSince(dolls, window, th);
-        if (!still) window = framesOf(dolls);
-        const detail::RestWindow::Verdict verdict = rest.update(judge.now, still);
-        if (verdict == detail::RestWindow::Verdict::Jitter) {
-            // Still, but a body held in place reports a spin.
-            judge.fail(StressCause::Jitter,
-                       rest.worstBody() + " turning at " + fixed(rest.worstSpin(), 1) + " rad/s while at rest");
-            return;
-        }
-        if (verdict == detail::RestWindow::Verdict::Rested) {
-            r.restAtS = rest.start();
-            return;
-        }
-    }
-    if (judge.failed()) return;
-    if (lastSecondSpin > th.maxResidualSpinRadps)
-        judge.fail(StressCause::Jitter,
-                   lastSecondSpinBody + " turning at " + fixed(lastSecondSpin, 1) + " rad/s in the last second");
-    else judge.fail(StressCause::NoRest, "still moving after " + fixed(th.restWithinS, 0) + " s");
+    Stepper<Doll>(scene, dolls, setup, th, r).run(guard);
 }
 
 } // namespace
