@@ -221,8 +221,8 @@ StressScenario chainMassRatio(int ratio) {
             }};
 }
 
-std::vector<StressScenario> makeScenarios() {
-    std::vector<StressScenario> out;
+// The built figures: chains of mass and inertia ratios, ropes, overlapping bodies, tiny bodies.
+void addBuiltScenarios(std::vector<StressScenario>& out) {
     for (int ratio : {1, 10, 100, 1000}) out.push_back(chainMassRatio(ratio));
     out.push_back({"thin-rods", "4 rods 1 m x 2 cm (inertia ratio 1250:1, floored at 1000:1), dropped 1 m tilted 20°",
                    false, [](const StressContent&) -> std::optional<StressSetup> {
@@ -255,6 +255,11 @@ std::vector<StressScenario> makeScenarios() {
                        for (int i = 0; i < 5; ++i) spec.links.push_back({0.01, 0.01, 0.05});
                        return single(chainFigure(spec), rotation({0, 1, 0}, 20), 1.0);
                    }});
+}
+
+// The bundled humanoid alone: drops from height and at coarse steps, a spin, spawned in the ground or outside its
+// limits, hit while lying.
+void addHumanoidScenarios(std::vector<StressScenario>& out) {
     out.push_back({"humanoid-drop-10m", "bundled humanoid dropped 10 m", true,
                    [](const StressContent& c) { return humanoidDrop(c, 10, 60); }});
     out.push_back({"humanoid-drop-100m", "bundled humanoid dropped 100 m", true,
@@ -302,27 +307,37 @@ std::vector<StressScenario> makeScenarios() {
                        s.impulse = StressImpulse{1.0, 0, torso, Eigen::Vector3d(0, 500, 0)};
                        return s;
                    }});
-    out.push_back({"humanoid-pile-160", "160 humanoids lying, 80 layers of 2 over one spot, dropped from 0.5-28 m",
-                   true, [](const StressContent& c) -> std::optional<StressSetup> {
-                       if (!c.humanoid) return std::nullopt;
-                       StressSetup s;
-                       s.figures.push_back(*c.humanoid);
-                       const Eigen::Matrix3d lying = rotation({0, 1, 0}, -90);
-                       const Eigen::AlignedBox3d box = bounds(s.figures[0], lying);
-                       const double thickness = box.sizes().z() + 0.05, lateral = box.sizes().y() / 2 + 0.03;
-                       for (int i = 0; i < 160; ++i) {
-                           // Two side by side per layer, each layer turned 37° from the one below.
-                           const int layer = i / 2;
-                           const Eigen::Matrix3d yaw = rotation({0, 0, 1}, 37.0 * layer);
-                           const Eigen::Vector3d offset = yaw * Eigen::Vector3d(0, i % 2 == 0 ? -lateral : lateral, 0);
-                           s.spawns.push_back(
-                               spawnAt(s.figures[0], yaw * lying, 0.5 + thickness * layer, offset.x(), offset.y()));
-                       }
-                       return s;
-                   }});
-    return out;
 }
 
+// 160 humanoids dropped in a pile.
+StressScenario humanoidPile() {
+    return {"humanoid-pile-160", "160 humanoids lying, 80 layers of 2 over one spot, dropped from 0.5-28 m", true,
+            [](const StressContent& c) -> std::optional<StressSetup> {
+                if (!c.humanoid) return std::nullopt;
+                StressSetup s;
+                s.figures.push_back(*c.humanoid);
+                const Eigen::Matrix3d lying = rotation({0, 1, 0}, -90);
+                const Eigen::AlignedBox3d box = bounds(s.figures[0], lying);
+                const double thickness = box.sizes().z() + 0.05, lateral = box.sizes().y() / 2 + 0.03;
+                for (int i = 0; i < 160; ++i) {
+                    // Two side by side per layer, each layer turned 37° from the one below.
+                    const int layer = i / 2;
+                    const Eigen::Matrix3d yaw = rotation({0, 0, 1}, 37.0 * layer);
+                    const Eigen::Vector3d offset = yaw * Eigen::Vector3d(0, i % 2 == 0 ? -lateral : lateral, 0);
+                    s.spawns.push_back(
+                        spawnAt(s.figures[0], yaw * lying, 0.5 + thickness * layer, offset.x(), offset.y()));
+                }
+                return s;
+            }};
+}
+
+std::vector<StressScenario> makeScenarios() {
+    std::vector<StressScenario> out;
+    addBuiltScenarios(out);
+    addHumanoidScenarios(out);
+    out.push_back(humanoidPile());
+    return out;
+}
 } // namespace
 
 const std::vector<StressScenario>& stressScenarios() {
