@@ -184,6 +184,71 @@ std::vector<std::string> Library::figureNames() const {
 
 // --- model decls ------------------------------------------------------------------------------------------
 
+namespace {
+
+using AnimIndex = std::map<std::string, std::size_t, std::less<>>; // full name → index into the flat anims
+
+// `remove x` deletes every inherited anim named x or whose alias is x (so `pain` takes pain1, pain2); an x that
+// matches none is an error.
+bool removeInheritedAnims(const ModelDef& m, const std::string& where, ModelDef& flat, AnimIndex& animIndex,
+                          text::Diagnostics& diagnostics) {
+    const std::set<std::string, std::less<>> targets(m.removes.begin(), m.removes.end());
+    std::set<std::string, std::less<>> used;
+    std::vector<ModelAnim> kept;
+    for (ModelAnim& a : flat.anims) {
+        const std::string alias = a.alias();
+        if (targets.count(a.name)) used.insert(a.name);
+        if (targets.count(alias)) used.insert(alias);
+        if (!targets.count(a.name) && !targets.count(alias)) kept.push_back(std::move(a));
+    }
+    for (const std::string& r : m.removes)
+        if (!used.count(r)) {
+            diagnostics.error(m.location, where + " removes anim '" + r + "', which it does not inherit");
+            return false;
+        }
+    flat.anims = std::move(kept);
+    animIndex.clear();
+    for (std::size_t i = 0; i < flat.anims.size(); ++i) animIndex.emplace(flat.anims[i].name, i);
+    return true;
+}
+
+// One decl of the inherit chain applied over what its parents left in `flat`, as CopyDecl and its statements
+// would (docs/format.md §7.1): mesh, skin and offset replace; `remove` deletes inherited anims; an anim replaces
+// an inherited one of its name in place or is appended (twice in one decl is an error); channels replace by name.
+bool applyModelDecl(const ModelDef& m, ModelDef& flat, AnimIndex& animIndex, text::Diagnostics& diagnostics) {
+    const std::string where = "model decl '" + m.name + "'";
+    if (m.mesh) flat.mesh = m.mesh;
+    if (m.skin) flat.skin = m.skin;
+    if (m.offset) flat.offset = m.offset;
+    if (!flat.mesh && (!m.anims.empty() || !m.channels.empty())) {
+        diagnostics.error(m.location, where + " defines anims or channels but has no mesh, and inherits none");
+        return false;
+    }
+    if (!m.removes.empty() && !removeInheritedAnims(m, where, flat, animIndex, diagnostics)) return false;
+    const std::size_t inheritedCount = flat.anims.size();
+    for (const ModelAnim& a : m.anims) {
+        const auto found = animIndex.find(a.name);
+        if (found == animIndex.end()) {
+            animIndex.emplace(a.name, flat.anims.size());
+            flat.anims.push_back(a);
+        } else if (found->second < inheritedCount) {
+            flat.anims[found->second] = a; // overrides the inherited anim in place
+        } else {
+            diagnostics.error(a.location, "duplicate anim '" + a.name + "' in " + where);
+            return false;
+        }
+    }
+    for (const ModelChannel& c : m.channels) {
+        const auto same = std::find_if(flat.channels.begin(), flat.channels.end(),
+                                       [&](const ModelChannel& x) { return text::equalsIgnoreCase(x.name, c.name); });
+        if (same != flat.channels.end()) *same = c;
+        else flat.channels.push_back(c);
+    }
+    return true;
+}
+
+} // namespace
+
 std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::Diagnostics& diagnostics) const {
     const auto leaf = findModelDef(name);
     if (!leaf) {
@@ -215,65 +280,13 @@ std::optional<ResolvedModel> Library::resolveModel(std::string_view name, text::
         current = &parent->decl;
     }
 
-    // Apply from the root down, as each CopyDecl + statements would (docs/format.md §7.1).
+    // Apply from the root down.
     ModelDef& flat = result.model;
     flat.name = leaf->decl.name;
     flat.location = leaf->decl.location;
-    std::map<std::string, std::size_t, std::less<>> animIndex; // full name → index into flat.anims
-    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
-        const ModelDef& m = **it;
-        const std::string where = "model decl '" + m.name + "'";
-        if (m.mesh) flat.mesh = m.mesh;
-        if (m.skin) flat.skin = m.skin;
-        if (m.offset) flat.offset = m.offset;
-        if (!flat.mesh && (!m.anims.empty() || !m.channels.empty())) {
-            diagnostics.error(m.location, where + " defines anims or channels but has no mesh, and inherits none");
-            return std::nullopt;
-        }
-
-        if (!m.removes.empty()) {
-            // `remove x` deletes every inherited anim named x or whose alias is x (so `pain` takes pain1,
-            // pain2).
-            const std::set<std::string, std::less<>> targets(m.removes.begin(), m.removes.end());
-            std::set<std::string, std::less<>> used;
-            std::vector<ModelAnim> kept;
-            for (ModelAnim& a : flat.anims) {
-                const std::string alias = a.alias();
-                if (targets.count(a.name)) used.insert(a.name);
-                if (targets.count(alias)) used.insert(alias);
-                if (!targets.count(a.name) && !targets.count(alias)) kept.push_back(std::move(a));
-            }
-            for (const std::string& r : m.removes)
-                if (!used.count(r)) {
-                    diagnostics.error(m.location, where + " removes anim '" + r + "', which it does not inherit");
-                    return std::nullopt;
-                }
-            flat.anims = std::move(kept);
-            animIndex.clear();
-            for (std::size_t i = 0; i < flat.anims.size(); ++i) animIndex.emplace(flat.anims[i].name, i);
-        }
-
-        const std::size_t inheritedCount = flat.anims.size();
-        for (const ModelAnim& a : m.anims) {
-            const auto found = animIndex.find(a.name);
-            if (found == animIndex.end()) {
-                animIndex.emplace(a.name, flat.anims.size());
-                flat.anims.push_back(a);
-            } else if (found->second < inheritedCount) {
-                flat.anims[found->second] = a; // overrides the inherited anim in place
-            } else {
-                diagnostics.error(a.location, "duplicate anim '" + a.name + "' in " + where);
-                return std::nullopt;
-            }
-        }
-        for (const ModelChannel& c : m.channels) {
-            const auto same = std::find_if(flat.channels.begin(), flat.channels.end(), [&](const ModelChannel& x) {
-                return text::equalsIgnoreCase(x.name, c.name);
-            });
-            if (same != flat.channels.end()) *same = c;
-            else flat.channels.push_back(c);
-        }
-    }
+    AnimIndex animIndex;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it)
+        if (!applyModelDecl(**it, flat, animIndex, diagnostics)) return std::nullopt;
     if (!flat.mesh) {
         diagnostics.error(leaf->decl.location, "model decl '" + leaf->decl.name + "' has no mesh" +
                                                    (chain.size() > 1 ? " (nor does any decl it inherits)" : ""));
