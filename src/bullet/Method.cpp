@@ -146,6 +146,7 @@ namespace {
 Method iterative(std::string_view name) {
     Method m = iterativeJoints(Method{});
     m.name = std::string(name);
+    m.selfContactCap = 10;
     return m;
 }
 

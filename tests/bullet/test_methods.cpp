@@ -32,9 +32,11 @@ TEST_CASE("methods: presets, knobs and their text form", "[bullet][methods]") {
     }
     CHECK_FALSE(afb::bullet::methodPreset("fastest"));
     CHECK(*afb::bullet::methodPreset("default") == Method{});
-    // "iterative": the default's knobs with Bullet's iterative joint solve (the previous default).
+    // "iterative": the default's knobs with Bullet's iterative joint solve (the previous default), and the bound on
+    // self-contacts' warm start that solve needs.
     Method iterative = afb::bullet::iterativeJoints(Method{});
     iterative.name = "iterative";
+    iterative.selfContactCap = 10;
     CHECK(*afb::bullet::methodPreset("iterative") == iterative);
     CHECK_FALSE(afb::bullet::methodPreset("iterative")->directJoints);
 
@@ -105,10 +107,11 @@ TEST_CASE("methods: without a RagdollSolver the default falls back to the iterat
 
 TEST_CASE("self-contact cap: a contact within one ragdoll starts from at most k times its pair's weight per step",
           "[bullet][methods]") {
-    // RagdollWorld gives its RagdollSolver the bound of Method::selfContactCap: for two bodies of one ragdoll
+    // RagdollWorld gives its RagdollSolver the bound of Method::selfContactCap (10 in the iterative presets, off in
+    // those with the direct joint solve): for two bodies of one ragdoll
     // k·(m_a + m_b)·g·dt, for anything else none. The solver then starts a point whose last impulse is above the
     // bound from the bound, its friction scaled by the same factor, and leaves a point below it alone.
-    afb::sim::Scene scene(*afb::bullet::methodPreset("default"));
+    afb::sim::Scene scene(*afb::bullet::methodPreset("iterative"));
     const afb::figure::Figure humanoid =
         armFigure("ballAndSocketJoint \"b\" { body1 \"arm\" body2 \"top\" anchor ( 0, 0, 100 ) friction 0 }");
     auto& a = scene.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
@@ -118,7 +121,7 @@ TEST_CASE("self-contact cap: a contact within one ragdoll starts from at most k 
     const auto& cap = solver->contactWarmStartCap();
     REQUIRE(cap);
     const btScalar dt = btScalar(1.0 / 60.0);
-    const double k = afb::bullet::methodPreset("default")->selfContactCap;
+    const double k = afb::bullet::methodPreset("iterative")->selfContactCap;
     REQUIRE(k > 0);
     btPersistentManifold self(&a.body(0), &a.body(1), 0, btScalar(0.02), btScalar(0.02));
     btPersistentManifold across(&a.body(1), &b.body(1), 0, btScalar(0.02), btScalar(0.02));
@@ -130,14 +133,14 @@ TEST_CASE("self-contact cap: a contact within one ragdoll starts from at most k 
     CHECK(cap(game, dt) < 0);
 
     // The weight is taken at standard gravity at least: weightless, a self-contact still starts warm.
-    afb::sim::Scene weightless(*afb::bullet::methodPreset("default"), {.gravityMps2 = 0, .ground = false});
+    afb::sim::Scene weightless(*afb::bullet::methodPreset("iterative"), {.gravityMps2 = 0, .ground = false});
     auto& w = weightless.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
     auto* wsolver = dynamic_cast<afb::bullet::RagdollSolver*>(weightless.world().getConstraintSolver());
     REQUIRE(wsolver != nullptr);
     btPersistentManifold wself(&w.body(0), &w.body(1), 0, btScalar(0.02), btScalar(0.02));
     CHECK(wsolver->contactWarmStartCap()(wself, dt) == Approx(k * weight).epsilon(1e-5));
     // and at the world's own when that is stronger (Doom's 27.1 m/s²).
-    afb::sim::Scene heavy(*afb::bullet::methodPreset("default"), {.gravityMps2 = 27.1, .ground = false});
+    afb::sim::Scene heavy(*afb::bullet::methodPreset("iterative"), {.gravityMps2 = 27.1, .ground = false});
     auto& h = heavy.spawn(RagdollAsset::create(humanoid), {.comeToRest = false});
     auto* hsolver = dynamic_cast<afb::bullet::RagdollSolver*>(heavy.world().getConstraintSolver());
     REQUIRE(hsolver != nullptr);

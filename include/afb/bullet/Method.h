@@ -112,11 +112,14 @@ struct Method {
     /// Warm start of a contact between two bodies of one ragdoll (self-collision) carries at most this many
     /// times the pair's weight per step (m_a + m_b)·g·dt, g the world's gravity but at least 9.81 m/s² (a
     /// weightless world would otherwise cold-start every self-contact); 0: no bound (Bullet's warm start). A forearm
-    /// pressed into the torso closes a loop through shoulder and elbow that the velocity solve cannot satisfy;
-    /// warm-started without a bound, the contact's impulse and the elbow's opposing row grow every step while the
-    /// forearm sinks into the torso (docs/methods.md). Much lower bounds let a limb lying under the torso pull off
-    /// its joint. Needs a RagdollSolver; no effect without it.
-    double selfContactCap = 10;
+    /// pressed into the torso closes a loop through shoulder and elbow that Bullet's iterative joint solve cannot
+    /// satisfy; warm-started without a bound, the contact's impulse and the elbow's opposing row grow every step
+    /// while the forearm sinks into the torso (docs/methods.md). Much lower bounds let a limb lying under the torso
+    /// pull off its joint. 10 in iterative and accurate; off (0) in the presets with the direct joint solve, whose
+    /// exact joints leave no such fight: there the bound changes no drop and no stress run, and without it the
+    /// 160-humanoid pile's deepest contacts are 26–44 mm instead of 30–50 mm (docs/stability.md). Needs a
+    /// RagdollSolver; no effect without it.
+    double selfContactCap = 0;
 
     // --- per-ragdoll knobs (SpawnOptions::method) ---------------------------------------------------------------
     /// Solver iterations of the figure's joints and limits (btTypedConstraint's per-constraint override), or 0
