@@ -150,104 +150,117 @@ Method iterative(std::string_view name) {
     return m;
 }
 
+// afbullet 0.1: Bullet's solver with none of the techniques (a reference).
+Method legacyPreset(std::string_view name) {
+    Method m = iterative(name);
+    m.iterations = 10;
+    m.jointIterations = 20;
+    m.positionIterations = 0;
+    m.multipointContacts = m.speculativeContacts = m.speculativeLimits = m.jointWarmStarting = false;
+    m.limitWarmStarting = false;
+    m.positionVelocity = false;
+    m.selfContactCap = 0;
+    m.mergeFixed = false;
+    m.exemptOverlapping = false;
+    m.constantVelocityUniversal = false;
+    m.impactSubsteps = 1;
+    m.separatedPairs = false;
+    return m;
+}
+
+Method fastPreset(std::string_view name) {
+    // The default's direct joint solve in block mode (each iteration: the joints exactly, then the ragdolls'
+    // contacts and limits together), two iterations, two position sweeps and a tree step over the anchors.
+    // Against Bullet's iterative solve with our rows and two sweeps (`iterative:position-iterations=2`, the
+    // previous fast): humanoid 46.7 k → 48.9 k instructions, anchors 21 mm → 0.1 mm and limits 14° → 1.9° at
+    // 1 m, stress 116 → 136 of 136 runs. The tree step over the limits too (position-tree 2) holds them to 0.6°
+    // for 4 % more; without a tree step the anchors open 20 mm at 10 m (docs/methods.md).
+    Method m;
+    m.name = std::string(name);
+    m.figureIterations = 2;
+    m.positionIterations = 2;
+    m.positionTree = 1;
+    return m;
+}
+
+Method balancedPreset(std::string_view name) {
+    // The default's solve and position pass in block mode, three iterations. Against the default: humanoid
+    // 70.5 k → 52.5 k instructions per awake body-step, zsec figures 84 k → 56 k; worst over the humanoid and
+    // the three zsec figures at 4 yaws, 1 m 0.1 mm / 0.1° / 5 mm → 0.1 mm / 0.7° / 7 mm, 10 m 0.1 mm / 1.1° /
+    // 25 mm → 0.8 mm / 0.5° / 9 mm; stress 135 → 136 of 136 runs. Its few passes over the rows taken in turn
+    // leave joint friction less converged: a humanoid dropped upright from 1 m stands 0.9 s where the default
+    // and converged solves stand 1.7–2.2 s, so 160 of them come to rest lying rather than standing (0.35× plain
+    // Bullet's CPU per body-step against the default's 0.12×; dropped tumbled 0.29× against 0.34×).
+    // Two iterations cost 1.2 k less but leave more penetration (9 / 12 / 30 mm at 1 / 10 / 100 m against
+    // 7 / 9 / 22); four fail 12 stress runs (docs/methods.md).
+    Method m;
+    m.name = std::string(name);
+    m.figureIterations = 3;
+    return m;
+}
+
+// The iterative solve in 2 substeps.
+Method accuratePreset(std::string_view name) {
+    Method m = iterative(name);
+    m.substeps = 2;
+    m.jointIterations = 0; // the world's 20
+    // The constant-velocity universal joint: stress 124 → 135 of 136 runs, humanoid rows at 24 yaws 150 → 188
+    // of 192 (docs/stability.md).
+    m.constantVelocityUniversal = true;
+    m.positionIterations = 2;
+    // Merged, a humanoid's forearm went into its torso at the 1 m drop (right shoulder 15.5 mm / 8.5° against
+    // 8.8 mm / 4.5°), though the stress matrix gains (docs/performance.md).
+    m.mergeFixed = false;
+    return m;
+}
+
+Method defaultPreset(std::string_view name) {
+    // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
+    // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced
+    // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
+    // 10 m for 0.94× this cost's predecessor (docs/methods.md). The velocity-exact joints still drift at the
+    // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without
+    // a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree step also puts
+    // limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only), moving
+    // what is above the ground rather than a foot into it (bodies in contact count 100× heavier there). Both
+    // tangents of every contact are held by friction: with Bullet's one sliding direction, a limb resting on
+    // the ground or on the figure was kicked every few steps through the other tangent and never rested
+    // (stress matrix 96 → 124 of 136 runs). Fewer iterations cost less but rest less often (15: 71.6 k
+    // instructions against 77.7 k, 124 stress runs against 134).
+    Method m;
+    m.name = std::string(name);
+    return m;
+}
+
+Method multibodyPreset(std::string_view name) {
+    // Reduced coordinates: no joint rows to iterate, warm-start or project; contacts as the rigid default's
+    // (20 iterations, vertex contacts, speculative, warm-started), limits our own speculative rows, then 4
+    // position sweeps over the limits and contacts (docs/methods.md). Continuous collision is
+    // the rigid backend's (Bullet's multibody world has none).
+    Method m = iterative(name);
+    m.backend = Backend::Multibody;
+    m.jointIterations = 0;
+    m.positionIterations = 4;
+    m.jointWarmStarting = m.limitWarmStarting = false;
+    m.positionVelocity = false;
+    m.ccd = CcdPolicy::Off;
+    m.selfContactCap = 0;     // Bullet's multibody solver, not a RagdollSolver
+    m.mergeFixed = false;     // a rigid-backend layout
+    m.frictionDirections = 2; // what btMultiBodyDynamicsWorld itself sets (SOLVER_USE_2_FRICTION_DIRECTIONS)
+    return m;
+}
+
 } // namespace
 
 std::optional<Method> methodPreset(std::string_view name) {
-    if (name == "legacy") {
-        Method m = iterative(name);
-        m.iterations = 10;
-        m.jointIterations = 20;
-        m.positionIterations = 0;
-        m.multipointContacts = m.speculativeContacts = m.speculativeLimits = m.jointWarmStarting = false;
-        m.limitWarmStarting = false;
-        m.positionVelocity = false;
-        m.selfContactCap = 0;
-        m.mergeFixed = false;
-        m.exemptOverlapping = false;
-        m.constantVelocityUniversal = false;
-        m.impactSubsteps = 1;
-        m.separatedPairs = false;
-        return m;
-    }
-    if (name == "iterative") {
-        // The previous default, and what a world without a RagdollSolver runs (methodInForce).
-        return iterative(name);
-    }
-    if (name == "fast") {
-        // The default's direct joint solve in block mode (each iteration: the joints exactly, then the ragdolls'
-        // contacts and limits together), two iterations, two position sweeps and a tree step over the anchors.
-        // Against Bullet's iterative solve with our rows and two sweeps (`iterative:position-iterations=2`, the
-        // previous fast): humanoid 46.7 k → 48.9 k instructions, anchors 21 mm → 0.1 mm and limits 14° → 1.9° at
-        // 1 m, stress 116 → 136 of 136 runs. The tree step over the limits too (position-tree 2) holds them to 0.6°
-        // for 4 % more; without a tree step the anchors open 20 mm at 10 m (docs/methods.md).
-        Method m;
-        m.name = std::string(name);
-        m.figureIterations = 2;
-        m.positionIterations = 2;
-        m.positionTree = 1;
-        return m;
-    }
-    if (name == "balanced") {
-        // The default's solve and position pass in block mode, three iterations. Against the default: humanoid
-        // 70.6 k → 52.6 k instructions per awake body-step, zsec figures 84 k → 56 k; worst over the humanoid and
-        // the three zsec figures at 4 yaws, 1 m 0.1 mm / 0.1° / 5 mm → 0.1 mm / 0.7° / 7 mm, 10 m 0.1 mm / 1.1° /
-        // 25 mm → 0.8 mm / 0.5° / 9 mm; stress 135 → 136 of 136 runs. Its few passes over the rows taken in turn
-        // leave joint friction less converged: a humanoid dropped upright from 1 m falls where the default stands,
-        // so 160 of them take 0.37× plain Bullet's CPU per body-step to come to rest against the default's 0.13×.
-        // Two iterations cost 1.2 k less but leave more penetration (9 / 12 / 30 mm at 1 / 10 / 100 m against
-        // 7 / 9 / 22); four fail 12 stress runs (docs/methods.md).
-        Method m;
-        m.name = std::string(name);
-        m.figureIterations = 3;
-        return m;
-    }
-    if (name == "accurate") {
-        Method m = iterative(name);
-        m.substeps = 2;
-        m.jointIterations = 0; // the world's 20
-        // The constant-velocity universal joint: stress 124 → 135 of 136 runs, humanoid rows at 24 yaws 150 → 188
-        // of 192 (docs/stability.md).
-        m.constantVelocityUniversal = true;
-        m.positionIterations = 2;
-        // Merged, a humanoid's forearm went into its torso at the 1 m drop (right shoulder 15.5 mm / 8.5° against
-        // 8.8 mm / 4.5°), though the stress matrix gains (docs/performance.md).
-        m.mergeFixed = false;
-        return m;
-    }
-    if (name == "default" || name == "exact") {
-        // The direct joint solve (RagdollSolver): joints exact at the velocity level, and contacts and limits
-        // against the whole ragdoll's mass (Method's defaults). The iterative default it replaced
-        // left 20 mm / 11° at 1 m; four substeps of ten iterations reached 11 mm / 9° at 1 m and 60 mm / 54° at
-        // 10 m for 0.94× this cost's predecessor (docs/methods.md). The velocity-exact joints still drift at the
-        // position level (rotation is integrated, not linear: about ½·ω²·r·dt² per step, 25 mm at impact without
-        // a position pass); the sweeps leave 3.6 mm, the tree step after them 0.1 mm. The tree step also puts
-        // limits back (positionTree 2: the ankle stayed 3.8° past its stop at 1 m with anchors only), moving
-        // what is above the ground rather than a foot into it (bodies in contact count 100× heavier there). Both
-        // tangents of every contact are held by friction: with Bullet's one sliding direction, a limb resting on
-        // the ground or on the figure was kicked every few steps through the other tangent and never rested
-        // (stress matrix 96 → 124 of 136 runs). Fewer iterations cost less but rest less often (15: 71.6 k
-        // instructions against 77.7 k, 124 stress runs against 134).
-        Method m;
-        m.name = std::string(name);
-        return m;
-    }
-    if (name == "multibody") {
-        // Reduced coordinates: no joint rows to iterate, warm-start or project; contacts as the rigid default's
-        // (20 iterations, vertex contacts, speculative, warm-started), limits our own speculative rows, then 4
-        // position sweeps over the limits and contacts (docs/methods.md). Continuous collision is
-        // the rigid backend's (Bullet's multibody world has none).
-        Method m = iterative(name);
-        m.backend = Backend::Multibody;
-        m.jointIterations = 0;
-        m.positionIterations = 4;
-        m.jointWarmStarting = m.limitWarmStarting = false;
-        m.positionVelocity = false;
-        m.ccd = CcdPolicy::Off;
-        m.selfContactCap = 0;     // Bullet's multibody solver, not a RagdollSolver
-        m.mergeFixed = false;     // a rigid-backend layout
-        m.frictionDirections = 2; // what btMultiBodyDynamicsWorld itself sets (SOLVER_USE_2_FRICTION_DIRECTIONS)
-        return m;
-    }
+    if (name == "legacy") return legacyPreset(name);
+    // The previous default, and what a world without a RagdollSolver runs (methodInForce).
+    if (name == "iterative") return iterative(name);
+    if (name == "fast") return fastPreset(name);
+    if (name == "balanced") return balancedPreset(name);
+    if (name == "accurate") return accuratePreset(name);
+    if (name == "default" || name == "exact") return defaultPreset(name);
+    if (name == "multibody") return multibodyPreset(name);
     return std::nullopt;
 }
 
