@@ -107,11 +107,8 @@ std::vector<Mesh> humanoidMeshes(const Skeleton& sk) {
     return {body, head};
 }
 
-std::string humanoidAf(const Skeleton& sk) {
-    AfBuilder af("humanoid", sk);
-    af.settings("model_humanoid", 70);
-    const double s45 = rnd(std::sin(45 * kDeg), 6);
-
+// The humanoid's bodies: pelvis, torso and head, then each arm, then each leg.
+void humanoidBodies(AfBuilder& af) {
     af.body("pelvis", "origin", shape(ShapeKind::Box, {-4.5, -6.5, -4}, {4.5, 6.5, 4}), lit(0, 0, 38), 10,
             "*origin -*spine -*l_thigh -*r_thigh")
         .friction = BodyFriction{0.01, 0.01, 0.8};
@@ -147,7 +144,12 @@ std::string humanoidAf(const Skeleton& sk) {
                 "*" + p + "_foot")
             .friction = BodyFriction{0.01, 0.01, 1};
     }
+}
 
+// The humanoid's joints: waist and neck, then each arm's shoulder, elbow and wrist, then each leg's hip, knee and
+// ankle.
+void humanoidConstraints(AfBuilder& af) {
+    const double s45 = rnd(std::sin(45 * kDeg), 6);
     {
         AfConstraint& c = af.constraint(ConstraintType::Universal, "waist", "torso", "pelvis");
         c.anchor = jointV("spine");
@@ -208,6 +210,13 @@ std::string humanoidAf(const Skeleton& sk) {
             c.limit = PyramidLimit{lit(1, 0, 0), 30, 70, 0, lit(1, 0, 0)};
         }
     }
+}
+
+std::string humanoidAf(const Skeleton& sk) {
+    AfBuilder af("humanoid", sk);
+    af.settings("model_humanoid", 70);
+    humanoidBodies(af);
+    humanoidConstraints(af);
     return writeAf(af.decl);
 }
 
