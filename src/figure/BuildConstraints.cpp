@@ -40,19 +40,15 @@ Vector3d Builder::dirInBody(int body, const Vector3d& dirModel) const {
     return m_figure.bodies[static_cast<std::size_t>(body)].loadPose.rotation.transpose() * dirModel;
 }
 
-void Builder::buildConstraint(std::size_t i) {
+// The constraint's two bodies (body2 absent or unknown: the world). False, with an error, when body1 matches no
+// body or both are the same.
+bool Builder::constraintBodies(std::size_t i, FigureConstraint& out, const std::string& what) {
     const AfConstraint& c = m_decl.constraints[i];
-    const std::string what = std::string(decl::keywordOf(c.type)) + " '" + c.name + "'";
-    FigureConstraint out;
-    out.name = c.name;
-    out.location = c.location;
-    out.type = jointTypeOf(c.type);
-
     const std::string name1 = c.body1.value_or(m_decl.defaultBody1(i));
     const std::optional<int> b1 = bodyIndex(name1);
     if (!b1) {
         error(c.location, what + ": body1 \"" + name1 + "\" matches no body (the engine would crash)");
-        return;
+        return false;
     }
     out.body1 = *b1;
     const std::string name2 = c.body2.value_or("world");
@@ -66,8 +62,34 @@ void Builder::buildConstraint(std::size_t i) {
     }
     if (out.body1 == out.body2) {
         error(c.location, what + ": body1 and body2 are the same body '" + name1 + "'");
-        return;
+        return false;
     }
+    return true;
+}
+
+// The joint's friction (§4.8): 0.5 unless given, none for fixed joints; parsed but never applied to sliders and
+// springs; bounded by kMaxJointFriction. False, with an error, when negative.
+bool Builder::jointFriction(const AfConstraint& c, FigureConstraint& out, const std::string& what) {
+    out.friction = out.type == JointType::Fixed ? 0.0 : c.friction.value_or(0.5);
+    if (out.friction < 0.0) {
+        error(c.location, what + ": friction " + fmt(out.friction) + " is negative (it bounds a resisting force)");
+        return false;
+    }
+    if ((out.type == JointType::Slider || out.type == JointType::Spring) && c.friction && *c.friction != 0.0)
+        warning(c.location, what + ": friction is parsed but never applied by the engine to this type");
+    if (out.type == JointType::Slider || out.type == JointType::Spring) out.friction = 0.0;
+    out.friction = clampFriction(out.friction, kMaxJointFriction, c.location, what + ": joint friction");
+    return true;
+}
+
+void Builder::buildConstraint(std::size_t i) {
+    const AfConstraint& c = m_decl.constraints[i];
+    const std::string what = std::string(decl::keywordOf(c.type)) + " '" + c.name + "'";
+    FigureConstraint out;
+    out.name = c.name;
+    out.location = c.location;
+    out.type = jointTypeOf(c.type);
+    if (!constraintBodies(i, out, what) || !jointFriction(c, out, what)) return;
     const FigureBody& body1 = m_figure.bodies[static_cast<std::size_t>(out.body1)];
     const Matrix3d ref =
         out.body2 >= 0 ? m_figure.bodies[static_cast<std::size_t>(out.body2)].loadPose.rotation : Matrix3d::Identity();
@@ -83,16 +105,6 @@ void Builder::buildConstraint(std::size_t i) {
         error(c.location, what + ": " + key + " is a zero vector (the engine needs it; it defaults to 0)");
         return std::nullopt;
     };
-    out.friction = out.type == JointType::Fixed ? 0.0 : c.friction.value_or(0.5);
-    if (out.friction < 0.0) {
-        error(c.location, what + ": friction " + fmt(out.friction) + " is negative (it bounds a resisting force)");
-        return;
-    }
-    if ((out.type == JointType::Slider || out.type == JointType::Spring) && c.friction && *c.friction != 0.0)
-        warning(c.location, what + ": friction is parsed but never applied by the engine to this type");
-    if (out.type == JointType::Slider || out.type == JointType::Spring) out.friction = 0.0;
-    out.friction = clampFriction(out.friction, kMaxJointFriction, c.location, what + ": joint friction");
-
     Transform frame; // model space, metres; origin = anchor
     switch (out.type) {
     case JointType::Fixed: frame = body1.loadPose; break;

@@ -86,6 +86,8 @@ class Builder {
     Transform inBody(int body, const Transform& frame) const;
     Vector3d dirInBody(int body, const Vector3d& dirModel) const;
     void buildConstraint(std::size_t i);
+    bool constraintBodies(std::size_t i, FigureConstraint& out, const std::string& what);
+    bool jointFriction(const AfConstraint& c, FigureConstraint& out, const std::string& what);
     Limit limit(const AfConstraint& c, const FigureConstraint& out, const std::string& what,
                 std::optional<Vector3d> shaftModel);
     Limit hingeRange(const decl::HingeLimit& h, double axisLength, const AfConstraint& c, const std::string& what);
