@@ -12,6 +12,87 @@
 
 namespace afb::figure::detail {
 
+// Bounds.h: positive extents thinner than the minimum thickness grow about their centre (a cone's height is
+// v2.z − v1.z, §3.1).
+void Builder::thickenBounds(ShapeType type, Vector3d& v1, Vector3d& v2, const text::SourceLocation& at,
+                            const std::string& what) {
+    for (int i = 0; i < 3; ++i) {
+        const char* axisName[] = {"x", "y", "z"};
+        const double extent = v2[i] - v1[i];
+        const double grown = thick(extent, at, what + " " + axisName[i] + " extent");
+        if (grown == extent) continue;
+        if (type == ShapeType::Cone && i == 2) {
+            v1[i] = v2[i] - grown;
+        } else {
+            const double centre = 0.5 * (v1[i] + v2[i]);
+            v1[i] = centre - 0.5 * grown;
+            v2[i] = centre + 0.5 * grown;
+        }
+    }
+}
+
+// The body's polytope (§3.1) from its bounds; a bone's frame into `axis`. False, with an error, for a bone of zero
+// length or width.
+bool Builder::bodyShape(const decl::AfShape& shape, ShapeType type, const Vector3d& v1, const Vector3d& v2,
+                        const text::SourceLocation& at, const std::string& what, Work& w, Matrix3d& axis) {
+    const int sides = static_cast<int>(std::clamp<std::int64_t>(shape.numSides, -1000, 1000));
+    switch (type) {
+    case ShapeType::Box: w.polytope = makeBox(v1, v2); break;
+    case ShapeType::Octahedron: w.polytope = makeOctahedron(v1, v2); break;
+    case ShapeType::Dodecahedron: w.polytope = makeDodecahedron(v1, v2); break;
+    case ShapeType::Cylinder:
+    case ShapeType::Cone: {
+        const ShapeBuild sb = type == ShapeType::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
+        w.polytope = sb.polytope;
+        w.sidesUsed = sb.effectiveSides;
+        if (sb.clamped)
+            warning(at, what + ": " + std::to_string(shape.numSides) + " sides become " +
+                            std::to_string(sb.effectiveSides) + " (the engine's trace-model limits)");
+        break;
+    }
+    case ShapeType::Bone: {
+        const double length = (v2 - v1).norm();
+        if (!(length > 0.0)) {
+            error(at, what + ": bone from v1 to v2 has zero length");
+            return false;
+        }
+        if (!(shape.width > 0.0)) {
+            error(at, what + ": bone width " + fmt(shape.width) + " must be > 0");
+            return false;
+        }
+        w.polytope = makeBone(thick(length, at, what + " bone length"), thick(shape.width, at, what + " bone width"));
+        axis = boneFrame(v1, v2);
+        break;
+    }
+    }
+    return true;
+}
+
+// §3.3 SetDensity: mass and inertia scale with density; inertiaScale is a matrix product. False, with an error,
+// when the density gives no valid mass.
+bool Builder::bodyMass(const AfBody& b, const std::string& what, const MassProperties& unit, Work& w) {
+    const double density = b.density.value_or(0.2);
+    w.mass = density * unit.volume;
+    w.inertia = unit.inertia * density;
+    if (!(w.mass > 0.0) || !std::isfinite(w.mass)) {
+        error(b.location, what + ": density " + fmt(density) +
+                              " gives an invalid mass (the engine replaces it with mass 1 and identity inertia)");
+        return false;
+    }
+    if (b.inertiaScale) {
+        Matrix3d scale;
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) scale(r, c) = (*b.inertiaScale)[static_cast<std::size_t>(3 * r + c)];
+        w.inertia = w.inertia * scale;
+        const double asym = (w.inertia - w.inertia.transpose()).norm();
+        if (asym > 1e-9 * w.inertia.norm())
+            warning(b.location, what + ": inertiaScale makes the inertia tensor asymmetric; its symmetric part "
+                                       "is used");
+        w.inertia = 0.5 * (w.inertia + w.inertia.transpose());
+    }
+    return true;
+}
+
 void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
     const AfBody& b = m_decl.bodies[declIndex];
     Work w;
@@ -28,59 +109,14 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
     if (!withinFigure(v1, b.location, what + " shape bound") || !withinFigure(v2, b.location, what + " shape bound") ||
         !withinFigure(origin, b.location, what + " origin"))
         return;
-    // Bounds.h: positive extents thinner than the minimum thickness grow about their centre (a cone's height
-    // is v2.z − v1.z, §3.1).
-    if (type != ShapeType::Bone)
-        for (int i = 0; i < 3; ++i) {
-            const char* axisName[] = {"x", "y", "z"};
-            const double extent = v2[i] - v1[i];
-            const double grown = thick(extent, b.location, what + " " + axisName[i] + " extent");
-            if (grown == extent) continue;
-            if (type == ShapeType::Cone && i == 2) {
-                v1[i] = v2[i] - grown;
-            } else {
-                const double centre = 0.5 * (v1[i] + v2[i]);
-                v1[i] = centre - 0.5 * grown;
-                v2[i] = centre + 0.5 * grown;
-            }
-        }
+    if (type != ShapeType::Bone) thickenBounds(type, v1, v2, b.location, what);
     Matrix3d axis = Matrix3d::Identity();
     if (b.angles && type != ShapeType::Bone && b.angles->form == AfVector::Form::Literal)
         axis = anglesToRotation(b.angles->literal.x, b.angles->literal.y, b.angles->literal.z);
     if (b.angles && type == ShapeType::Bone)
         warning(b.location, what + ": angles are ignored for a bone (its axis runs from v1 to v2)");
 
-    const int sides = static_cast<int>(std::clamp<std::int64_t>(shape.numSides, -1000, 1000));
-    switch (type) {
-    case ShapeType::Box: w.polytope = makeBox(v1, v2); break;
-    case ShapeType::Octahedron: w.polytope = makeOctahedron(v1, v2); break;
-    case ShapeType::Dodecahedron: w.polytope = makeDodecahedron(v1, v2); break;
-    case ShapeType::Cylinder:
-    case ShapeType::Cone: {
-        const ShapeBuild sb = type == ShapeType::Cylinder ? makeCylinder(v1, v2, sides) : makeCone(v1, v2, sides);
-        w.polytope = sb.polytope;
-        w.sidesUsed = sb.effectiveSides;
-        if (sb.clamped)
-            warning(b.location, what + ": " + std::to_string(shape.numSides) + " sides become " +
-                                    std::to_string(sb.effectiveSides) + " (the engine's trace-model limits)");
-        break;
-    }
-    case ShapeType::Bone: {
-        const double length = (v2 - v1).norm();
-        if (!(length > 0.0)) {
-            error(b.location, what + ": bone from v1 to v2 has zero length");
-            return;
-        }
-        if (!(shape.width > 0.0)) {
-            error(b.location, what + ": bone width " + fmt(shape.width) + " must be > 0");
-            return;
-        }
-        w.polytope = makeBone(thick(length, b.location, what + " bone length"),
-                              thick(shape.width, b.location, what + " bone width"));
-        axis = boneFrame(v1, v2);
-        break;
-    }
-    }
+    if (!bodyShape(shape, type, v1, v2, b.location, what, w, axis)) return;
     w.type = type;
 
     // §2.2: mass properties at density 1 give the local COM c; the body origin moves to origin + R·c.
@@ -97,26 +133,7 @@ void Builder::buildBody(std::size_t declIndex, bool isOriginBody) {
     w.pose.position = origin + axis * unit.centerOfMass;
     w.volume = unit.volume;
 
-    // §3.3 SetDensity: mass and inertia scale with density; inertiaScale is a matrix product.
-    const double density = b.density.value_or(0.2);
-    w.mass = density * unit.volume;
-    w.inertia = unit.inertia * density;
-    if (!(w.mass > 0.0) || !std::isfinite(w.mass)) {
-        error(b.location, what + ": density " + fmt(density) +
-                              " gives an invalid mass (the engine replaces it with mass 1 and identity inertia)");
-        return;
-    }
-    if (b.inertiaScale) {
-        Matrix3d scale;
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) scale(r, c) = (*b.inertiaScale)[static_cast<std::size_t>(3 * r + c)];
-        w.inertia = w.inertia * scale;
-        const double asym = (w.inertia - w.inertia.transpose()).norm();
-        if (asym > 1e-9 * w.inertia.norm())
-            warning(b.location, what + ": inertiaScale makes the inertia tensor asymmetric; its symmetric part "
-                                       "is used");
-        w.inertia = 0.5 * (w.inertia + w.inertia.transpose());
-    }
+    if (!bodyMass(b, what, unit, w)) return;
     if (isOriginBody && b.mod && !text::equalsIgnoreCase(*b.mod, "orientation"))
         warning(b.location, what + " is the origin body: its mod '" + *b.mod +
                                 "' is ignored (the engine always drives orientation)");

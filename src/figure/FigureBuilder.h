@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afb/figure/Figure.h"
+#include "afb/figure/MassProperties.h"
 #include "afb/figure/Polytope.h"
 
 namespace afb::figure::detail {
@@ -73,6 +74,11 @@ class Builder {
 
     // BuildBodies.cpp
     void buildBody(std::size_t declIndex, bool isOriginBody);
+    void thickenBounds(ShapeType type, Vector3d& v1, Vector3d& v2, const text::SourceLocation& at,
+                       const std::string& what);
+    bool bodyShape(const decl::AfShape& shape, ShapeType type, const Vector3d& v1, const Vector3d& v2,
+                   const text::SourceLocation& at, const std::string& what, Work& w, Matrix3d& axis);
+    bool bodyMass(const AfBody& b, const std::string& what, const MassProperties& unit, Work& w);
     void applyTotalMass(double totalMass);
     decl::BodyFriction friction(const Work& w);
     std::uint32_t contents(const decl::ContentsList& list, const AfBody& b, const char* what);
