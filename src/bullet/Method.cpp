@@ -190,7 +190,7 @@ Method balancedPreset(std::string_view name) {
     // 25 mm → 0.8 mm / 0.5° / 9 mm; stress 135 → 136 of 136 runs. Its few passes over the rows taken in turn
     // leave joint friction less converged: a humanoid dropped upright from 1 m stands 0.9 s where the default
     // and converged solves stand 1.7–2.2 s, so 160 of them come to rest lying rather than standing (0.35× plain
-    // Bullet's CPU per body-step against the default's 0.12×; dropped tumbled 0.29× against 0.34×).
+    // Bullet's CPU per body-step against the default's 0.12×; dropped tumbled, both about a third).
     // Two iterations cost 1.2 k less but leave more penetration (9 / 12 / 30 mm at 1 / 10 / 100 m against
     // 7 / 9 / 22); four fail 12 stress runs (docs/methods.md).
     Method m;

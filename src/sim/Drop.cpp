@@ -242,29 +242,42 @@ std::string bulletVersion() {
 
 const char* bulletPrecision() { return sizeof(btScalar) == sizeof(double) ? "double" : "float"; }
 
+std::vector<DropTurn> dropTurns(std::optional<std::uint32_t> seed, int count) {
+    std::mt19937 rng(seed.value_or(0));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<DropTurn> out(static_cast<std::size_t>(std::max(count, 0)));
+    for (int i = 0; i < count; ++i) {
+        DropTurn& t = out[static_cast<std::size_t>(i)];
+        if (!seed) {
+            t.yawRad = 37.0 * i * std::numbers::pi / 180.0;
+            continue;
+        }
+        t.yawRad = unit(rng) * 2 * std::numbers::pi;
+        t.tiltRad = unit(rng) * std::numbers::pi / 2;
+        t.tiltHeadingRad = unit(rng) * 2 * std::numbers::pi;
+    }
+    return out;
+}
+
 namespace {
 
 // Spawn transforms, per world: a grid, each figure turned (fixed set or seeded), its lowest point at the height;
 // instance i goes to world i mod worlds.
 std::vector<std::vector<btTransform>> spawnGrid(const figure::Figure& figure, const DropOptions& o, int count,
                                                 int worlds) {
-    std::mt19937 rng(o.seed.value_or(0));
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const std::vector<DropTurn> turns = dropTurns(o.seed, count);
     btVector3 lo, hi;
     figureBounds(figure, btMatrix3x3::getIdentity(), lo, hi);
     const double spacing = (hi - lo).length() + 0.5;
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
     std::vector<std::vector<btTransform>> perWorld(static_cast<std::size_t>(worlds));
     for (int i = 0; i < count; ++i) {
-        double yaw = 37.0 * i * std::numbers::pi / 180.0, tilt = 0, tiltDir = 0;
-        if (o.seed) {
-            yaw = unit(rng) * 2 * std::numbers::pi;
-            tilt = unit(rng) * std::numbers::pi / 2;
-            tiltDir = unit(rng) * 2 * std::numbers::pi;
-        }
-        btQuaternion q(btVector3(0, 0, 1), btScalar(yaw));
-        if (tilt > 0)
-            q = btQuaternion(btVector3(btScalar(std::cos(tiltDir)), btScalar(std::sin(tiltDir)), 0), btScalar(tilt)) *
+        const DropTurn& turn = turns[static_cast<std::size_t>(i)];
+        btQuaternion q(btVector3(0, 0, 1), btScalar(turn.yawRad));
+        if (turn.tiltRad > 0)
+            q = btQuaternion(btVector3(btScalar(std::cos(turn.tiltHeadingRad)), btScalar(std::sin(turn.tiltHeadingRad)),
+                                       0),
+                             btScalar(turn.tiltRad)) *
                 q;
         const btMatrix3x3 rot(q);
         figureBounds(figure, rot, lo, hi);

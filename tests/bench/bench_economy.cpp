@@ -23,8 +23,6 @@
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <numbers>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -36,6 +34,7 @@
 #include "afb/decl/Library.h"
 #include "afb/figure/Load.h"
 #include "afb/figure/Lod.h"
+#include "afb/sim/Drop.h"
 #include "afb/sim/RawRagdoll.h"
 #include "afb/sim/Scene.h"
 
@@ -102,8 +101,8 @@ double lowestPoint(const afb::figure::Figure& figure, const btQuaternion& turn) 
     return lowest;
 }
 
-/// How the dropped humanoids are turned: 37° apart in yaw, upright; or `tumbled`, at a random yaw and tipped by up
-/// to 90° about a random horizontal axis (the distribution and seed of `afb drop --seed 1`).
+/// How the dropped humanoids are turned: 37° apart in yaw, upright; or `tumbled`, as `afb drop --seed 1` turns them
+/// (sim::dropTurns: a random yaw, tipped by up to 90° about a random horizontal axis).
 enum class Turn { Upright, Tumbled };
 
 /// `count` humanoids on a grid, the lowest point `heightM` above the ground.
@@ -114,18 +113,18 @@ struct Drop {
         const auto asset = humanoid();
         const double spacing = 2.5;
         const int columns = 13;
-        std::mt19937 rng(1);
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        const std::vector<afb::sim::DropTurn> tumbles = afb::sim::dropTurns(1u, turn == Turn::Tumbled ? count : 0);
+        const double uprightLowest = lowestPoint(asset->figure(), btQuaternion::getIdentity());
         for (int i = 0; i < count; ++i) {
             btQuaternion q(btVector3(0, 0, 1), btScalar(0.6458 * i));
             if (turn == Turn::Tumbled) {
-                const double yaw = unit(rng) * 2 * std::numbers::pi, tilt = unit(rng) * std::numbers::pi / 2,
-                             tiltDir = unit(rng) * 2 * std::numbers::pi;
-                q = btQuaternion(btVector3(btScalar(std::cos(tiltDir)), btScalar(std::sin(tiltDir)), 0),
-                                 btScalar(tilt)) *
-                    btQuaternion(btVector3(0, 0, 1), btScalar(yaw));
+                const afb::sim::DropTurn& t = tumbles[static_cast<std::size_t>(i)];
+                q = btQuaternion(btVector3(btScalar(std::cos(t.tiltHeadingRad)), btScalar(std::sin(t.tiltHeadingRad)),
+                                           0),
+                                 btScalar(t.tiltRad)) *
+                    btQuaternion(btVector3(0, 0, 1), btScalar(t.yawRad));
             }
-            const double lowest = lowestPoint(asset->figure(), turn == Turn::Tumbled ? q : btQuaternion::getIdentity());
+            const double lowest = turn == Turn::Tumbled ? lowestPoint(asset->figure(), q) : uprightLowest;
             afb::bullet::SpawnOptions o;
             o.comeToRest = sleeping;
             o.entityTransform =
@@ -138,9 +137,8 @@ struct Drop {
         for (int i = 0; i < resting; ++i) {
             afb::bullet::SpawnOptions o;
             o.startAtRest = true;
-            o.entityTransform.setOrigin(
-                btVector3(btScalar(spacing * (i % 40)), btScalar(20 + spacing * (i / 40)),
-                          btScalar(-lowestPoint(asset->figure(), btQuaternion::getIdentity()) + 0.001)));
+            o.entityTransform.setOrigin(btVector3(btScalar(spacing * (i % 40)), btScalar(20 + spacing * (i / 40)),
+                                                  btScalar(-uprightLowest + 0.001)));
             if (afb::sim::isRaw(method)) scene.spawnRaw(asset, o);
             else scene.spawn(asset, o);
         }

@@ -39,6 +39,17 @@ struct DropOptions {
     std::optional<bullet::MotorGains> motors;
 };
 
+/// How a drop turns instance i at spawn: about +Z by `yawRad`, then by `tiltRad` about the horizontal axis at
+/// `tiltHeadingRad` from +X.
+struct DropTurn {
+    double yawRad = 0, tiltRad = 0, tiltHeadingRad = 0;
+};
+
+/// The turns of `count` instances: without a seed, yaw 37°·i and no tilt; with one (DropOptions::seed), per instance
+/// a yaw uniform in [0, 2π), a tilt uniform in [0, π/2) and its heading uniform in [0, 2π), drawn in that order
+/// from one std::mt19937 seeded with it.
+std::vector<DropTurn> dropTurns(std::optional<std::uint32_t> seed, int count);
+
 /// One joint of a settled pose: model space of the instance, metres.
 struct JointPose {
     std::string name;
