@@ -287,37 +287,6 @@ void RagdollSolver::softenRow(btSolverConstraint& c) {
 
 void RagdollSolver::untrack(const btTypedConstraint& constraint) { m_rows.remove(btHashPtr(&constraint)); }
 
-void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstraints,
-                                  const btContactSolverInfo& infoGlobal) {
-    btSequentialImpulseConstraintSolver::convertJoints(constraints, numConstraints, infoGlobal);
-    if (m_rows.size() == 0) return;
-    const bool warmStarting = (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) != 0;
-    // The base class lays the rows out constraint by constraint, in the order given, m_numConstraintRows each.
-    int row = 0;
-    for (int i = 0; i < numConstraints; ++i) {
-        const int rows = m_tmpConstraintSizesPool[i].m_numConstraintRows;
-        const Tracked* t = m_rows.find(btHashPtr(constraints[i]));
-        if (t != nullptr && t->soft)
-            for (int k = 0; k < rows; ++k) softenRow(m_tmpSolverNonContactConstraintPool[row + k]);
-        if (t != nullptr && warmStarting && t->warmStart && t->rows == rows) {
-            for (int k = 0; k < rows; ++k) {
-                btSolverConstraint& c = m_tmpSolverNonContactConstraintPool[row + k];
-                const btScalar start = t->impulses[k] * infoGlobal.m_warmstartingFactor;
-                c.m_appliedImpulse = btMax(c.m_lowerLimit, btMin(c.m_upperLimit, start));
-                if (c.m_appliedImpulse == 0) continue;
-                // As a solver iteration applies a row's impulse (resolveSingleConstraintRowGeneric).
-                btSolverBody& a = m_tmpSolverBodyPool[c.m_solverBodyIdA];
-                btSolverBody& b = m_tmpSolverBodyPool[c.m_solverBodyIdB];
-                a.internalApplyImpulse(c.m_contactNormal1 * a.internalGetInvMass(), c.m_angularComponentA,
-                                       c.m_appliedImpulse);
-                b.internalApplyImpulse(c.m_contactNormal2 * b.internalGetInvMass(), c.m_angularComponentB,
-                                       c.m_appliedImpulse);
-            }
-        }
-        row += rows;
-    }
-}
-
 btScalar RagdollSolver::solveGroupCacheFriendlyFinish(btCollisionObject** bodies, int numBodies,
                                                       const btContactSolverInfo& infoGlobal) {
     if (m_rows.size() > 0) {

@@ -93,7 +93,8 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// Bounds each contact point's last impulse by the cap (its warm start), then Bullet's contact rows.
     void convertContacts(btPersistentManifold** manifoldPtr, int numManifolds,
                          const btContactSolverInfo& infoGlobal) override;
-    /// Bullet's joint rows, then each tracked constraint's rows warm-started from their last impulses.
+    /// The constraints' rows as Bullet sets them up (to the bit), each tracked constraint's warm-started from its
+    /// last impulses (JointRows.cpp).
     void convertJoints(btTypedConstraint** constraints, int numConstraints,
                        const btContactSolverInfo& infoGlobal) override;
     /// Keeps each tracked constraint's row impulses for the next step, then Bullet's finish.
@@ -145,6 +146,9 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     };
     IslandOrder m_islandOrder;
     static void softenRow(btSolverConstraint& c);
+    void setUpJointRows(btSolverConstraint* rows, btTypedConstraint& constraint, int count, int idA, int idB,
+                        const btContactSolverInfo& infoGlobal);
+    void startTrackedRows(btSolverConstraint* rows, int count, const Tracked& t, bool warmStarting, btScalar factor);
     int m_mostIslandsInTurn = 0;
     struct Direct;
     bool buildDirect();
