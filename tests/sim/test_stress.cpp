@@ -59,10 +59,15 @@ TEST_CASE("stress: every scenario builds, names are unique, the CI subset exists
         CHECK_FALSE(setup->spawns.empty());
         CHECK(s.build({}).has_value() == !s.needsHumanoid); // humanoid scenarios are skipped without it
     }
-    CHECK(names.size() == 18);
+    CHECK(names.size() == 19);
     for (std::string_view n : sim::stressCiScenarios()) CHECK(sim::findStressScenario(n) != nullptr);
-    // The pile is 160 humanoids.
-    CHECK(setupOf("humanoid-pile-160", content).spawns.size() == 160);
+    // The piles are 12 and 160 humanoids, two per layer, each layer above the last.
+    for (const int count : {12, 160}) {
+        const sim::StressSetup pile = setupOf(("humanoid-pile-" + std::to_string(count)).c_str(), content);
+        REQUIRE(pile.spawns.size() == static_cast<std::size_t>(count));
+        for (std::size_t i = 2; i < pile.spawns.size(); ++i)
+            CHECK(pile.spawns[i].entity.position.z() > pile.spawns[i - 2].entity.position.z());
+    }
     // The mass-ratio chains have the ratio they say across every joint.
     const sim::StressSetup chain = setupOf("chain-mass-1000");
     const auto& bodies = chain.figures[0].bodies;
