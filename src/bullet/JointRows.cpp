@@ -7,7 +7,8 @@
 // tracked constraints then need a second pass over every row. Here each product is taken once, a constraint's
 // body velocities are read once, and a row is finished while it is in cache. Every value is rounded as Bullet
 // rounds it (the same operations on the same operands in the same order), so the rows, and every result after
-// them, are Bullet's to the bit.
+// them, are Bullet's to the bit. With SIMD rows off (setSimdRows: plain Bullet's reference, `raw`), Bullet's own
+// setup runs instead, so that the reference costs what Bullet costs.
 #include <cstring>
 
 #include "afb/bullet/RagdollSolver.h"
@@ -16,6 +17,20 @@ namespace afb::bullet {
 
 void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstraints,
                                   const btContactSolverInfo& infoGlobal) {
+    const bool warmStarting = (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) != 0;
+    if (!m_simdRows) { // Bullet's own setup, so that plain Bullet's reference costs what Bullet costs
+        btSequentialImpulseConstraintSolver::convertJoints(constraints, numConstraints, infoGlobal);
+        if (m_rows.size() == 0) return;
+        int row = 0;
+        for (int i = 0; i < numConstraints; ++i) {
+            const int rows = m_tmpConstraintSizesPool[i].m_numConstraintRows;
+            if (const Tracked* t = m_rows.find(btHashPtr(constraints[i])); t != nullptr && rows > 0)
+                startTrackedRows(&m_tmpSolverNonContactConstraintPool[row], rows, *t, warmStarting,
+                                 infoGlobal.m_warmstartingFactor);
+            row += rows;
+        }
+        return;
+    }
     for (int j = 0; j < numConstraints; ++j) {
         constraints[j]->buildJacobian();
         constraints[j]->internalSetAppliedImpulse(0);
@@ -39,7 +54,6 @@ void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstr
         totalRows += info1.m_numConstraintRows;
     }
     m_tmpSolverNonContactConstraintPool.resizeNoInitialize(totalRows);
-    const bool warmStarting = (infoGlobal.m_solverMode & SOLVER_USE_WARMSTARTING) != 0;
     int row = 0;
     for (int i = 0; i < numConstraints; ++i) {
         const btTypedConstraint::btConstraintInfo1& info1 = m_tmpConstraintSizesPool[i];

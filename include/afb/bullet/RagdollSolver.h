@@ -69,7 +69,8 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
     /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, with the
     /// islands of a solve taken in turn (islandsInTurn; each island's result unchanged to the bit), or that scalar
-    /// reference itself in Bullet's loop and order (off; what `raw`, plain Bullet, runs).
+    /// reference itself in Bullet's loop and order (off; what `raw`, plain Bullet, runs). Off, the constraints' rows
+    /// are also set up by Bullet's own code rather than the solver's (the same rows, at Bullet's price).
     void setSimdRows(bool on) { m_simdRows = on; }
     /// Whether the SIMD row update is on (setSimdRows).
     bool simdRows() const { return m_simdRows; }
