@@ -223,6 +223,14 @@ struct RagdollSolver::Direct {
         std::vector<int> plainDynamic; // rows with a side on a dynamic body of no group
         std::vector<int> seen, taken;
         std::vector<double> toGo, added;
+        // A taken row as the sweeps read it, laid out once per iteration: its fixed numbers and its couplings.
+        struct Sweep {
+            const std::pair<int, double>* link;
+            const std::pair<int, double>* linkEnd;
+            double toGo, cfmVel, invEffectiveMass, applied, lower, upper, friction;
+            int row, normal; // its block index; a friction row's contact's (−1: none)
+        };
+        std::vector<Sweep> sweep;
         void clear(std::size_t groupCount) {
             rows.clear();
             plainDynamic.clear();

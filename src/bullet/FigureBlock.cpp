@@ -127,27 +127,39 @@ double RagdollSolver::Direct::solveFigureBlock(btAlignedObjectArray<btSolverBody
     gatherBlock(bodyPool, iteration, contacts);
     if (block.taken.empty()) return 0;
     double* added = block.added.data();
+    // The impulses so far and the bounds stay as they are through the sweeps: read once (each row's own, and a
+    // friction row's contact impulse as `applied` of that contact's entry).
+    std::vector<Block::Sweep>& rows = block.sweep;
+    rows.clear();
+    for (const int r : block.taken) {
+        const FreeRow& fr = *block.rows[static_cast<std::size_t>(r)];
+        const btSolverConstraint& c = *fr.c;
+        const auto& links = block.links[static_cast<std::size_t>(r)];
+        rows.push_back({links.data(), links.data() + links.size(), block.toGo[static_cast<std::size_t>(r)], fr.cfmVel,
+                        fr.invEffectiveMass, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit),
+                        double(c.m_friction), r, fr.normal});
+    }
+    const auto appliedOf = [this](int r) {
+        return double(block.rows[static_cast<std::size_t>(r)]->c->m_appliedImpulse);
+    };
     double residual = 0;
     for (int sweep = 0; sweep < figureSweeps; ++sweep) {
         double largest = 0;
-        for (const int r : block.taken) {
-            const FreeRow& fr = *block.rows[static_cast<std::size_t>(r)];
-            const btSolverConstraint& c = *fr.c;
+        for (const Block::Sweep& q : rows) {
             double v = 0;
-            for (const auto& [s, w] : block.links[static_cast<std::size_t>(r)]) v += w * added[s];
-            double dl = (block.toGo[static_cast<std::size_t>(r)] - fr.cfmVel * added[r] - v) * fr.invEffectiveMass;
-            const double applied = double(c.m_appliedImpulse) + added[r];
-            double lower = double(c.m_lowerLimit), upper = double(c.m_upperLimit);
-            if (fr.normal >= 0) { // a friction row: ± friction × its contact's impulse so far
-                const FreeRow& n = *block.rows[static_cast<std::size_t>(fr.normal)];
-                const double total = std::max(0.0, double(n.c->m_appliedImpulse) + added[fr.normal]);
-                upper = double(c.m_friction) * total;
+            for (const std::pair<int, double>* l = q.link; l != q.linkEnd; ++l) v += l->second * added[l->first];
+            double dl = (q.toGo - q.cfmVel * added[q.row] - v) * q.invEffectiveMass;
+            const double applied = q.applied + added[q.row];
+            double lower = q.lower, upper = q.upper;
+            if (q.normal >= 0) { // a friction row: ± friction × its contact's impulse so far
+                const double total = std::max(0.0, appliedOf(q.normal) + added[q.normal]);
+                upper = q.friction * total;
                 lower = -upper;
             }
             if (applied + dl < lower) dl = lower - applied;
             else if (applied + dl > upper) dl = upper - applied;
-            added[r] += dl;
-            largest = std::max(largest, dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass));
+            added[q.row] += dl;
+            largest = std::max(largest, dl * dl / (q.invEffectiveMass * q.invEffectiveMass));
         }
         if (sweep == 0) residual = largest;
         if (largest <= figureTolerance) break;
