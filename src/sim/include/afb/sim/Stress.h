@@ -105,8 +105,8 @@ struct StressScenario {
 /// Every scenario of the matrix, in table order: chains with mass ratios 1:1 … 1:1000, long thin rods, a 30-link
 /// rope, a heavy weight on a world-attached chain, three bodies overlapping at the load pose against their limits,
 /// tiny 1 cm bodies, and the bundled humanoid dropped from 10 m and 100 m, at 30 and 15 Hz, spinning at 20 rad/s,
-/// spawned 10 cm into the ground, spawned 20° outside its hinge limits, hit by a 500 kg·m/s projectile, and 160 of
-/// it dropped onto one spot.
+/// spawned 10 cm into the ground, spawned 20° outside its hinge limits, hit by a 500 kg·m/s projectile, and 12 and
+/// 160 of it dropped in layers onto one spot.
 const std::vector<StressScenario>& stressScenarios();
 /// The scenario called `name`, or nullptr.
 const StressScenario* findStressScenario(std::string_view name);
