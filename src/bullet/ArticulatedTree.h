@@ -1,0 +1,85 @@
+// The exact joint solve of one ragdoll in joint space: the system BlockTree solves, M Δv = f + Jᵀλ and J Δv = e
+// (no compliance), for a tree of bodies held by point joints whose rotation is free about some axes and locked about
+// the others (ball, universal, hinge). Each joint's free motions are eliminated from the leaves to the root
+// (Featherstone's articulated-body recursion, in impulse form): every body carries the inertia of the subtree
+// below it as its joint lets that subtree move, so no body needs a 6×6 inverse but the root and every solve works
+// on the joints' free motions (1 to 3 per joint) rather than on their rows (3 to 5). Internal to the bullet layer.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace afb::bullet {
+
+class ArticulatedTree {
+  public:
+    using Vec6 = Eigen::Matrix<double, 6, 1>; ///< linear then angular, as a solver row stores them
+    using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+    /// A body: its mass and its inertia tensor in the world (about its centre of mass).
+    struct Body {
+        double mass = 0;
+        Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    };
+    /// A joint row: its Jacobian at body `a` and at body `b` (linear, angular); −1 for a side that is not one of
+    /// the bodies (the world, or a body held still for this solve).
+    struct Row {
+        int a = -1, b = -1;
+        Vec6 ja = Vec6::Zero(), jb = Vec6::Zero();
+    };
+
+    /// Takes the bodies and the rows. False, and unusable, unless the rows of each body pair are one point joint
+    /// (three rows whose linear parts span space and whose angular parts are the anchor's lever arms on both sides)
+    /// plus at most two rows locking rotation (angular only, opposite on the two sides), and the pairs join the
+    /// bodies into one tree held to the world by at most one joint. The caller then keeps the general solve.
+    bool build(std::span<const Body> bodies, std::span<const Row> rows);
+    /// The articulated inertias of the bodies' current masses and rows. False when one is not positive definite.
+    bool factor();
+    /// Solves M Δv = f + Jᵀλ, J Δv = e: `f` and `dv` hold 6 entries per body, `e` and `lambda` one per row, in
+    /// build()'s order.
+    void solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
+               std::span<double> lambda) const;
+
+    /// solve() for impulses on body `a` alone and no joint targets, without the joints' impulses: a column of one row
+    /// through the figure (the path from `a` to the root carries the impulse up, every joint carries the motion down).
+    void solveImpulse(int a, const Vec6& f, std::span<double> dv) const;
+
+    int bodies() const { return static_cast<int>(m_mass.size()); }
+
+  private:
+    // One joint, stored at its child body, in order from the root (a parent before its children).
+    struct Joint {
+        int parent = -1, child = -1; // parent −1: the world
+        int free = 0;                // free rotations (3 − locked)
+        int rows[5] = {-1, -1, -1, -1, -1}; // the three anchor rows, then the locked ones
+        int locked = 0;
+        Eigen::Vector3d rc, d;          // the child's lever arm to its anchor; the shift from parent to child
+        Eigen::Matrix3d nInv;           // inverse of the anchor rows' directions (columns) at the child
+        Eigen::Matrix<double, 3, 2> u;  // locked axes at the child
+        Eigen::Matrix2d uGram;          // (UᵀU)⁻¹ of the locked axes
+        Eigen::Matrix<double, 6, 3> s;  // the free motions of the child (first `free` columns)
+        // factor(): I·S, D⁻¹ = (SᵀIS)⁻¹, and the inertia the joint passes to the parent (before the shift).
+        Eigen::Matrix<double, 6, 3> is;
+        Eigen::Matrix3d dInv;
+        Eigen::Matrix<double, 3, 6> k; // D⁻¹ (I S)ᵀ
+        Mat6 passed;
+    };
+    bool orient(std::span<const Row> rows);
+    bool shapeJoint(Joint& j, std::span<const Row> rows, const std::vector<int>& pairRows);
+    Vec6 particular(const Joint& j, std::span<const double> e) const;
+    void impulses(const Joint& j, const Vec6& g, std::span<double> lambda) const;
+
+    std::vector<double> m_mass;
+    std::vector<Eigen::Matrix3d> m_inertia;
+    std::vector<Joint> m_joints; // root first
+    std::vector<int> m_jointOf;  // per body: its joint (−1: the free root)
+    int m_root = -1;             // the free root body (−1: the tree hangs from the world)
+    std::vector<Mat6> m_ia;      // factor(): articulated inertias
+    Eigen::LLT<Mat6> m_rootFactor;
+    mutable std::vector<Vec6> m_p, m_pt, m_c; // solve()'s scratch: bias impulses, their part through the joint, offsets
+    mutable std::vector<Eigen::Vector3d> m_y; // D⁻¹ Sᵀ p per joint
+};
+
+} // namespace afb::bullet
