@@ -28,21 +28,23 @@ Mat3 skew(const Vec3& v) {
     return m;
 }
 
-// The lever arm r with ang = r × lin over a point joint's three rows (least squares), and whether every row fits
-// it to rounding.
-bool leverArm(const Vec3 (&lin)[3], const Vec3 (&ang)[3], Vec3& r) {
-    Mat3 a = Mat3::Zero();
+// The lever arm r with ang = r × lin over a point joint's three rows (least squares; with orthonormal directions
+// r = ½ Σ lin × ang), and whether every row fits it to rounding.
+bool leverArm(const Vec3 (&lin)[3], const Vec3 (&ang)[3], bool orthonormal, Vec3& r) {
     Vec3 b = Vec3::Zero();
-    for (int i = 0; i < 3; ++i) {
-        a += lin[i].squaredNorm() * Mat3::Identity() - lin[i] * lin[i].transpose();
-        b += lin[i].cross(ang[i]);
+    for (int i = 0; i < 3; ++i) b += lin[i].cross(ang[i]);
+    if (orthonormal) {
+        r = 0.5 * b;
+    } else {
+        Mat3 a = Mat3::Zero();
+        for (int i = 0; i < 3; ++i) a += lin[i].squaredNorm() * Mat3::Identity() - lin[i] * lin[i].transpose();
+        const double det = a.determinant();
+        if (!(std::abs(det) > 1e-12 * std::pow(a.trace() / 3, 3))) return false;
+        r = a.inverse() * b;
     }
-    const double det = a.determinant();
-    if (!(std::abs(det) > 1e-12 * std::pow(a.trace() / 3, 3))) return false;
-    r = a.inverse() * b;
     for (int i = 0; i < 3; ++i) {
-        const double scale = ang[i].norm() + r.norm() * lin[i].norm() + 1e-12;
-        if ((ang[i] - r.cross(lin[i])).norm() > 1e-5 * scale) return false;
+        const double scale = ang[i].squaredNorm() + r.squaredNorm() * lin[i].squaredNorm() + 1e-24;
+        if ((ang[i] - r.cross(lin[i])).squaredNorm() > 1e-10 * scale) return false;
     }
     return true;
 }
@@ -80,7 +82,6 @@ Mat6 shiftInertia(const Vec3& d, const Mat6& p) {
 } // namespace
 
 bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> rows) {
-    m_joints.clear();
     m_mass.clear();
     m_inertia.clear();
     for (const Body& b : bodies) {
@@ -88,11 +89,25 @@ bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> r
         m_mass.push_back(b.mass);
         m_inertia.push_back(b.inertia);
     }
-    for (const Row& r : rows)
-        if (r.a < -1 || r.b < -1 || r.a >= static_cast<int>(bodies.size()) || r.b >= static_cast<int>(bodies.size()) ||
-            r.a == r.b || !r.ja.allFinite() || !r.jb.allFinite())
-            return false;
-    return orient(rows);
+    const int n = static_cast<int>(bodies.size());
+    bool same = m_valid && m_key.size() == 1 + 2 * rows.size() && m_key[0] == n;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        const Row& r = rows[k];
+        if (r.a < -1 || r.b < -1 || r.a >= n || r.b >= n || r.a == r.b || !r.ja.allFinite() || !r.jb.allFinite())
+            return m_valid = false;
+        same = same && m_key[1 + 2 * k] == r.a && m_key[2 + 2 * k] == r.b;
+    }
+    if (!same) {
+        m_key.assign(1, n);
+        for (const Row& r : rows) m_key.insert(m_key.end(), {r.a, r.b});
+        m_joints.clear();
+        m_valid = orient(rows);
+        if (!m_valid) return false;
+    }
+    // The same layout as last time: the same joints, reshaped from this step's rows.
+    for (Joint& j : m_joints)
+        if (!shapeJoint(j, rows)) return m_valid = false;
+    return true;
 }
 
 // The joints from the rows: one per body pair, oriented away from the root (the body held to the world, else the
@@ -149,8 +164,11 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
     for (std::size_t k = 0; k < m_joints.size(); ++k) {
         Joint& j = m_joints[k];
         m_jointOf[static_cast<std::size_t>(j.child)] = static_cast<int>(k);
-        const int q = parentPair[static_cast<std::size_t>(j.child)];
-        if (!shapeJoint(j, rows, pairs[static_cast<std::size_t>(q)].rows)) return false;
+        const std::vector<int>& mine =
+            pairs[static_cast<std::size_t>(parentPair[static_cast<std::size_t>(j.child)])].rows;
+        if (mine.size() > 5) return false;
+        j.pairCount = static_cast<int>(mine.size());
+        std::copy(mine.begin(), mine.end(), j.pairRows);
     }
     m_ia.resize(static_cast<std::size_t>(n));
     m_p.resize(static_cast<std::size_t>(n));
@@ -162,11 +180,12 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
 
 // A joint's geometry from its rows: the anchor rows' directions and both lever arms, the locked axes, the free
 // motions of the child.
-bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows, const std::vector<int>& pairRows) {
+bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows) {
     Vec3 lin[3], ang[3], linP[3], angP[3];
     int anchors = 0;
     j.locked = 0;
-    for (const int k : pairRows) {
+    for (int q = 0; q < j.pairCount; ++q) {
+        const int k = j.pairRows[q];
         const Row& r = rows[static_cast<std::size_t>(k)];
         const Vec6& jc = r.a == j.child ? r.ja : r.jb;
         const Vec6& jp = r.a == j.child ? r.jb : r.ja;
@@ -181,21 +200,27 @@ bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows, const std:
             j.rows[anchors++] = k;
             continue;
         }
-        if (j.locked == 2 || !(ac.squaredNorm() > 0) || (parent && (lp.squaredNorm() > 0 ||
-                                                                   (ap + ac).norm() > 1e-6 * ac.norm())))
+        if (j.locked == 2 || !(ac.squaredNorm() > 0) ||
+            (parent && (lp.squaredNorm() > 0 || (ap + ac).norm() > 1e-6 * ac.norm())))
             return false;
         j.u.col(j.locked) = ac;
         j.rows[3 + j.locked++] = k;
     }
-    if (anchors != 3 || !leverArm(lin, ang, j.rc)) return false;
-    Vec3 rp = Vec3::Zero();
-    if (j.parent >= 0 && !leverArm(linP, angP, rp)) return false;
-    j.d = rp - j.rc;
+    if (anchors != 3) return false;
     Mat3 nCols;
     for (int i = 0; i < 3; ++i) nCols.col(i) = lin[i];
-    const double det = nCols.determinant();
-    if (!(std::abs(det) > 1e-9 * lin[0].norm() * lin[1].norm() * lin[2].norm())) return false;
-    j.nInv = nCols.inverse();
+    const bool orthonormal = (nCols.transpose() * nCols - Mat3::Identity()).cwiseAbs().maxCoeff() < 1e-6;
+    if (!leverArm(lin, ang, orthonormal, j.rc)) return false;
+    Vec3 rp = Vec3::Zero();
+    if (j.parent >= 0 && !leverArm(linP, angP, orthonormal, rp)) return false;
+    j.d = rp - j.rc;
+    if (orthonormal) {
+        j.nInv = nCols.transpose();
+    } else {
+        const double det = nCols.determinant();
+        if (!(std::abs(det) > 1e-9 * lin[0].norm() * lin[1].norm() * lin[2].norm())) return false;
+        j.nInv = nCols.inverse();
+    }
     // The free rotations: every axis, those at right angles to the one locked axis, or the one at right angles to
     // both.
     Mat3 axes = Mat3::Identity();
@@ -214,10 +239,34 @@ bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows, const std:
     }
     j.free = 3 - j.locked;
     j.s.setZero();
+    j.is.setZero();
+    j.dInv.setZero();
+    j.k.setZero();
     for (int i = 0; i < j.free; ++i) {
         j.s.block<3, 1>(0, i) = j.rc.cross(axes.col(i));
         j.s.block<3, 1>(3, i) = axes.col(i);
     }
+    return true;
+}
+
+// One joint's elimination, over its F free motions: I·S, D⁻¹, K = D⁻¹ (I S)ᵀ and the inertia it passes on.
+template <int F>
+bool ArticulatedTree::factorJoint(Joint& j) {
+    using MatS = Eigen::Matrix<double, 6, F>;
+    const Eigen::Map<const MatS> s(j.s.data());
+    const Mat6& ia = m_ia[static_cast<std::size_t>(j.child)];
+    Eigen::Map<MatS> is(j.is.data());
+    is.noalias() = ia * s;
+    const Eigen::Matrix<double, F, F> d = s.transpose() * is;
+    Eigen::Matrix<double, F, F> dInv;
+    bool invertible = d(0, 0) > 0;
+    if constexpr (F == 1) dInv(0, 0) = 1.0 / d(0, 0);
+    else d.computeInverseWithCheck(dInv, invertible);
+    if (!invertible || !(dInv.diagonal().minCoeff() > 0)) return false;
+    j.dInv.topLeftCorner<F, F>() = dInv;
+    j.k.topRows<F>().noalias() = dInv * is.transpose();
+    j.passed = ia;
+    j.passed.noalias() -= is * j.k.topRows<F>();
     return true;
 }
 
@@ -229,22 +278,48 @@ bool ArticulatedTree::factor() {
     }
     for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
         Joint& j = *it;
-        const Mat6& ia = m_ia[static_cast<std::size_t>(j.child)];
-        j.is = ia * j.s;
-        // D = Sᵀ I S on the free motions; the unused ones get 1 on the diagonal (and contribute nothing, their
-        // columns of S being zero).
-        Mat3 d = j.s.transpose() * j.is;
-        for (int i = j.free; i < 3; ++i) d(i, i) = 1;
-        const Eigen::LLT<Mat3> llt(d);
-        if (llt.info() != Eigen::Success) return false;
-        j.dInv = llt.solve(Mat3::Identity());
-        j.k = j.dInv * j.is.transpose();
-        j.passed = ia - j.is * j.k;
+        const bool ok = j.free == 1 ? factorJoint<1>(j) : j.free == 2 ? factorJoint<2>(j) : factorJoint<3>(j);
+        if (!ok) return false;
         if (j.parent >= 0) m_ia[static_cast<std::size_t>(j.parent)] += shiftInertia(j.d, j.passed);
     }
     if (m_root < 0) return true;
     m_rootFactor.compute(m_ia[static_cast<std::size_t>(m_root)]);
     return m_rootFactor.info() == Eigen::Success;
+}
+
+// Leaves to root: the joint's free part of its child's bias impulse (y = D⁻¹ Sᵀ p), the rest passed to the parent.
+template <int F>
+void ArticulatedTree::upJoint(const Joint& j, bool targets) const {
+    using MatS = Eigen::Matrix<double, 6, F>;
+    const auto c = static_cast<std::size_t>(j.child);
+    const Eigen::Map<const MatS> s(j.s.data()), is(j.is.data());
+    const Eigen::Matrix<double, F, 1> y = j.dInv.topLeftCorner<F, F>() * (s.transpose() * m_p[c]);
+    m_y[c].head<F>() = y;
+    m_pt[c].noalias() = m_p[c] - is * y;
+    if (j.parent < 0) return;
+    Vec6 passed = m_pt[c];
+    if (targets) passed.noalias() -= j.passed * m_c[c];
+    m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, passed);
+}
+
+// upJoint() without passing to the parent (solveImpulse() walks the path itself).
+template <int F>
+void ArticulatedTree::upJointAlone(const Joint& j) const {
+    using MatS = Eigen::Matrix<double, 6, F>;
+    const auto c = static_cast<std::size_t>(j.child);
+    const Eigen::Map<const MatS> s(j.s.data()), is(j.is.data());
+    const Eigen::Matrix<double, F, 1> y = j.dInv.topLeftCorner<F, F>() * (s.transpose() * m_p[c]);
+    m_y[c].head<F>() = y;
+    m_pt[c].noalias() = m_p[c] - is * y;
+}
+
+// Root to leaves: the child's motion from the parent's carried one w (q̇ = y − K w).
+template <int F>
+Vec6 ArticulatedTree::downJoint(const Joint& j, const Vec6& w) const {
+    using MatS = Eigen::Matrix<double, 6, F>;
+    const Eigen::Map<const MatS> s(j.s.data());
+    const Eigen::Matrix<double, F, 1> qd = m_y[static_cast<std::size_t>(j.child)].head<F>() - j.k.topRows<F>() * w;
+    return w + s * qd;
 }
 
 // A child's motion c that meets the joint's rows asking e on their own (J_c c = e): the locked rows by a turn
@@ -253,8 +328,8 @@ Vec6 ArticulatedTree::particular(const Joint& j, std::span<const double> e) cons
     Vec3 turn = Vec3::Zero();
     if (j.locked == 1) turn = j.u.col(0) * (j.uGram(0, 0) * e[static_cast<std::size_t>(j.rows[3])]);
     if (j.locked == 2)
-        turn = j.u * (j.uGram * Eigen::Vector2d(e[static_cast<std::size_t>(j.rows[3])],
-                                                e[static_cast<std::size_t>(j.rows[4])]));
+        turn = j.u * (j.uGram *
+                      Eigen::Vector2d(e[static_cast<std::size_t>(j.rows[3])], e[static_cast<std::size_t>(j.rows[4])]));
     const Vec3 ea(e[static_cast<std::size_t>(j.rows[0])], e[static_cast<std::size_t>(j.rows[1])],
                   e[static_cast<std::size_t>(j.rows[2])]);
     const Vec3 anchor = j.nInv.transpose() * ea;
@@ -284,14 +359,14 @@ void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e
                             std::span<double> lambda) const {
     const std::size_t n = m_mass.size();
     for (std::size_t i = 0; i < n; ++i) m_p[i] = Eigen::Map<const Vec6>(f.data() + 6 * i);
+    const bool targets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
     for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
         const Joint& j = *it;
         const auto c = static_cast<std::size_t>(j.child);
-        m_c[c] = particular(j, e);
-        m_y[c] = j.dInv * (j.s.transpose() * m_p[c]);
-        m_pt[c] = m_p[c] - j.is * m_y[c];
-        if (j.parent >= 0)
-            m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, m_pt[c] - j.passed * m_c[c]);
+        m_c[c] = targets ? particular(j, e) : Vec6::Zero();
+        if (j.free == 1) upJoint<1>(j, targets);
+        else if (j.free == 2) upJoint<2>(j, targets);
+        else upJoint<3>(j, targets);
     }
     if (m_root >= 0)
         Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
@@ -300,38 +375,62 @@ void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e
         const auto c = static_cast<std::size_t>(j.child);
         Vec6 w = m_c[c];
         if (j.parent >= 0) w += shift(j.d, Eigen::Map<const Vec6>(dv.data() + 6 * static_cast<std::size_t>(j.parent)));
-        const Vec3 qd = m_y[c] - j.k * w;
-        Eigen::Map<Vec6>(dv.data() + 6 * c) = w + j.s * qd;
-        impulses(j, j.passed * w - m_pt[c], lambda);
+        Eigen::Map<Vec6>(dv.data() + 6 * c) = j.free == 1   ? downJoint<1>(j, w)
+                                              : j.free == 2 ? downJoint<2>(j, w)
+                                                            : downJoint<3>(j, w);
+        if (!lambda.empty()) impulses(j, j.passed * w - m_pt[c], lambda);
     }
 }
 
-void ArticulatedTree::solveImpulse(int a, const Vec6& f, std::span<double> dv) const {
-    Vec6 p = f; // the bias impulse on the path, at its current body
-    int body = a;
-    while (m_jointOf[static_cast<std::size_t>(body)] >= 0) {
-        const Joint& j = m_joints[static_cast<std::size_t>(m_jointOf[static_cast<std::size_t>(body)])];
-        const auto c = static_cast<std::size_t>(j.child);
-        m_y[c] = j.dInv * (j.s.transpose() * p);
-        m_pt[c] = p; // marks the body as on the path (m_y used below)
-        if (j.parent < 0) break;
-        p = shiftBack(j.d, p - j.is * m_y[c]);
-        body = j.parent;
+void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {
+    // Only the joints on the paths from a and b to the root carry an impulse up; off them, no free part of one.
+    m_onPath.assign(m_mass.size(), 0);
+    for (const int start : {a, b})
+        for (int body = start; body >= 0 && !m_onPath[static_cast<std::size_t>(body)];) {
+            m_onPath[static_cast<std::size_t>(body)] = 1;
+            m_p[static_cast<std::size_t>(body)].setZero();
+            const int jj = m_jointOf[static_cast<std::size_t>(body)];
+            body = jj < 0 ? -1 : m_joints[static_cast<std::size_t>(jj)].parent;
+        }
+    if (a >= 0) m_p[static_cast<std::size_t>(a)] += fa;
+    if (b >= 0) m_p[static_cast<std::size_t>(b)] += fb;
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
+        const Joint& j = *it;
+        if (!m_onPath[static_cast<std::size_t>(j.child)]) {
+            m_y[static_cast<std::size_t>(j.child)].setZero();
+            continue;
+        }
+        if (j.free == 1) upJoint<1>(j, false);
+        else if (j.free == 2) upJoint<2>(j, false);
+        else upJoint<3>(j, false);
     }
-    if (m_root >= 0) Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) = m_rootFactor.solve(p);
-    // Down: a joint off the path passes the parent's motion on, less what its subtree's inertia holds back.
-    std::vector<char> onPath(m_mass.size(), 0);
-    for (int b = a; b >= 0;) {
-        onPath[static_cast<std::size_t>(b)] = 1;
-        const int jj = m_jointOf[static_cast<std::size_t>(b)];
-        b = jj < 0 ? -1 : m_joints[static_cast<std::size_t>(jj)].parent;
-    }
+    if (m_root >= 0)
+        Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
+            m_rootFactor.solve(m_p[static_cast<std::size_t>(m_root)]);
     for (const Joint& j : m_joints) {
         const auto c = static_cast<std::size_t>(j.child);
         Vec6 w = Vec6::Zero();
         if (j.parent >= 0) w = shift(j.d, Eigen::Map<const Vec6>(dv.data() + 6 * static_cast<std::size_t>(j.parent)));
-        const Vec3 qd = (onPath[c] ? m_y[c] : Vec3::Zero()) - j.k * w;
-        Eigen::Map<Vec6>(dv.data() + 6 * c) = w + j.s * qd;
+        Eigen::Map<Vec6>(dv.data() + 6 * c) = j.free == 1   ? downJoint<1>(j, w)
+                                              : j.free == 2 ? downJoint<2>(j, w)
+                                                            : downJoint<3>(j, w);
+    }
+}
+
+void ArticulatedTree::jointImpulses(std::span<const double> f, std::span<const double> dv,
+                                    std::span<double> lambda) const {
+    // Leaves first: a child's joint impulse J_cᵀ λ_c = M_c Δv_c − f_c + Σ over its children k of T_kᵀ J_kᵀ λ_k.
+    for (Vec6& acc : m_p) acc.setZero();
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
+        const Joint& j = *it;
+        const auto c = static_cast<std::size_t>(j.child);
+        const Eigen::Map<const Vec6> v(dv.data() + 6 * c), fc(f.data() + 6 * c);
+        Vec6 g;
+        g.head<3>() = m_mass[c] * v.head<3>();
+        g.tail<3>() = m_inertia[c] * v.tail<3>();
+        g += m_p[c] - fc;
+        impulses(j, g, lambda);
+        if (j.parent >= 0) m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, g);
     }
 }
 

@@ -38,39 +38,54 @@ class ArticulatedTree {
     /// The articulated inertias of the bodies' current masses and rows. False when one is not positive definite.
     bool factor();
     /// Solves M Δv = f + Jᵀλ, J Δv = e: `f` and `dv` hold 6 entries per body, `e` and `lambda` one per row, in
-    /// build()'s order.
+    /// build()'s order (`lambda` empty: the impulses are not wanted).
     void solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
                std::span<double> lambda) const;
 
-    /// solve() for impulses on body `a` alone and no joint targets, without the joints' impulses: a column of one row
-    /// through the figure (the path from `a` to the root carries the impulse up, every joint carries the motion down).
-    void solveImpulse(int a, const Vec6& f, std::span<double> dv) const;
+    /// solve() for impulses `fa` on body a and `fb` on body b (−1: none) and no joint targets, without the joints'
+    /// impulses: a row's column through the figure. Only the paths from a and b to the root carry the impulses up.
+    void solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const;
+    /// The joint rows' impulses from the bodies' velocity changes `dv` and every other impulse `f` they took (6 per
+    /// body each), by each body's momentum: the impulses solve() would have returned for the same changes.
+    void jointImpulses(std::span<const double> f, std::span<const double> dv, std::span<double> lambda) const;
 
     int bodies() const { return static_cast<int>(m_mass.size()); }
 
   private:
     // One joint, stored at its child body, in order from the root (a parent before its children).
     struct Joint {
-        int parent = -1, child = -1; // parent −1: the world
-        int free = 0;                // free rotations (3 − locked)
+        int parent = -1, child = -1;            // parent −1: the world
+        int free = 0;                           // free rotations (3 − locked)
+        int pairRows[5] = {-1, -1, -1, -1, -1}; // the rows of the body pair, in their order
+        int pairCount = 0;
         int rows[5] = {-1, -1, -1, -1, -1}; // the three anchor rows, then the locked ones
         int locked = 0;
-        Eigen::Vector3d rc, d;          // the child's lever arm to its anchor; the shift from parent to child
-        Eigen::Matrix3d nInv;           // inverse of the anchor rows' directions (columns) at the child
-        Eigen::Matrix<double, 3, 2> u;  // locked axes at the child
-        Eigen::Matrix2d uGram;          // (UᵀU)⁻¹ of the locked axes
-        Eigen::Matrix<double, 6, 3> s;  // the free motions of the child (first `free` columns)
+        Eigen::Vector3d rc, d;         // the child's lever arm to its anchor; the shift from parent to child
+        Eigen::Matrix3d nInv;          // inverse of the anchor rows' directions (columns) at the child
+        Eigen::Matrix<double, 3, 2> u; // locked axes at the child
+        Eigen::Matrix2d uGram;         // (UᵀU)⁻¹ of the locked axes
+        Eigen::Matrix<double, 6, 3> s; // the free motions of the child (first `free` columns)
         // factor(): I·S, D⁻¹ = (SᵀIS)⁻¹, and the inertia the joint passes to the parent (before the shift).
         Eigen::Matrix<double, 6, 3> is;
         Eigen::Matrix3d dInv;
         Eigen::Matrix<double, 3, 6> k; // D⁻¹ (I S)ᵀ
         Mat6 passed;
     };
+    template <int F>
+    bool factorJoint(Joint& j);
+    template <int F>
+    void upJoint(const Joint& j, bool targets) const;
+    template <int F>
+    void upJointAlone(const Joint& j) const;
+    template <int F>
+    Vec6 downJoint(const Joint& j, const Vec6& w) const;
     bool orient(std::span<const Row> rows);
-    bool shapeJoint(Joint& j, std::span<const Row> rows, const std::vector<int>& pairRows);
+    bool shapeJoint(Joint& j, std::span<const Row> rows);
     Vec6 particular(const Joint& j, std::span<const double> e) const;
     void impulses(const Joint& j, const Vec6& g, std::span<double> lambda) const;
 
+    std::vector<int> m_key; // the layout build() last oriented: the bodies' count, then each row's two bodies
+    bool m_valid = false;
     std::vector<double> m_mass;
     std::vector<Eigen::Matrix3d> m_inertia;
     std::vector<Joint> m_joints; // root first
@@ -80,6 +95,7 @@ class ArticulatedTree {
     Eigen::LLT<Mat6> m_rootFactor;
     mutable std::vector<Vec6> m_p, m_pt, m_c; // solve()'s scratch: bias impulses, their part through the joint, offsets
     mutable std::vector<Eigen::Vector3d> m_y; // D⁻¹ Sᵀ p per joint
+    mutable std::vector<char> m_onPath;       // solveImpulse()'s bodies on a path to the root
 };
 
 } // namespace afb::bullet

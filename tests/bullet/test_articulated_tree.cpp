@@ -5,6 +5,8 @@
 // from the world; and the layouts it must refuse.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -61,10 +63,10 @@ Figure randomFigure(int n, bool hung, std::mt19937& rng) {
     Figure fig;
     std::uniform_real_distribution<double> mass(0.5, 70.0), axis(0.01, 2.0);
     for (int i = 0; i < n; ++i) {
-        const Eigen::Matrix3d rot = Eigen::Quaterniond(Eigen::Vector4d(randomVec(rng, 1).x(), randomVec(rng, 1).y(),
-                                                                       randomVec(rng, 1).z(), 1.0)
-                                                           .normalized())
-                                        .toRotationMatrix();
+        const Eigen::Matrix3d rot =
+            Eigen::Quaterniond(
+                Eigen::Vector4d(randomVec(rng, 1).x(), randomVec(rng, 1).y(), randomVec(rng, 1).z(), 1.0).normalized())
+                .toRotationMatrix();
         const Vec3 diag(axis(rng), axis(rng), axis(rng));
         fig.bodies.push_back({mass(rng), rot * diag.asDiagonal() * rot.transpose()});
         fig.centre.push_back(randomVec(rng, 1.0));
@@ -127,8 +129,7 @@ TEST_CASE("articulated tree: the joint-space solve gives the dense solve's veloc
     }
 }
 
-TEST_CASE("articulated tree: a body hung from the world by a hinge turns about the hinge alone",
-          "[bullet][direct]") {
+TEST_CASE("articulated tree: a body hung from the world by a hinge turns about the hinge alone", "[bullet][direct]") {
     // A rod of 2 kg, 1 m long along x, hinged about z at its end: an impulse of 1 N·s along y at its centre
     // turns it about the hinge with ω = J·p / (I_end) where I_end = m·L²/3, and moves its centre at ω·L/2.
     const double m = 2.0, len = 1.0;
@@ -192,5 +193,44 @@ TEST_CASE("articulated tree: refuses what is not a tree of point joints", "[bull
         fig.bodies.push_back(fig.bodies.back());
         ArticulatedTree tree;
         CHECK_FALSE(tree.build(fig.bodies, fig.rows));
+    }
+}
+
+TEST_CASE("articulated tree: columns of one or two bodies, and joint impulses from the bodies' momentum",
+          "[bullet][direct]") {
+    std::mt19937 rng(42);
+    for (int trial = 0; trial < 30; ++trial) {
+        const int n = 2 + trial % 12;
+        const Figure fig = randomFigure(n, trial % 4 == 0, rng);
+        ArticulatedTree tree;
+        REQUIRE(tree.build(fig.bodies, fig.rows));
+        REQUIRE(tree.factor());
+        const int k = static_cast<int>(fig.rows.size());
+        INFO("trial " << trial << ", " << n << " bodies");
+        // A row between bodies a and b (b −1 on every third trial: a contact with the ground).
+        const int a = std::uniform_int_distribution<int>(0, n - 1)(rng);
+        const int b = trial % 3 == 0 ? -1 : std::uniform_int_distribution<int>(0, n - 1)(rng);
+        const Vec6 fa = (Vec6() << randomVec(rng, 1), randomVec(rng, 1)).finished();
+        const Vec6 fb = (Vec6() << randomVec(rng, 1), randomVec(rng, 1)).finished();
+        std::vector<double> f(static_cast<std::size_t>(6 * n), 0.0), e(static_cast<std::size_t>(k), 0.0);
+        for (int q = 0; q < 6; ++q) {
+            f[static_cast<std::size_t>(6 * a + q)] += fa[q];
+            if (b >= 0) f[static_cast<std::size_t>(6 * b + q)] += fb[q];
+        }
+        std::vector<double> dv(static_cast<std::size_t>(6 * n)), column(static_cast<std::size_t>(6 * n));
+        std::vector<double> lambda(static_cast<std::size_t>(k)), recovered(static_cast<std::size_t>(k));
+        tree.solve(f, e, dv, lambda);
+        tree.solveImpulse(a, fa, b, fb, column);
+        for (int i = 0; i < 6 * n; ++i)
+            CHECK(column[static_cast<std::size_t>(i)] == Approx(dv[static_cast<std::size_t>(i)]).margin(1e-12));
+        // With targets too: the momentum of the velocity changes gives back the joints' impulses.
+        for (double& v : e) v = std::uniform_real_distribution<double>(-1, 1)(rng);
+        tree.solve(f, e, dv, lambda);
+        tree.jointImpulses(f, dv, recovered);
+        const double scale = 1 + *std::max_element(lambda.begin(), lambda.end(),
+                                                   [](double x, double y) { return std::abs(x) < std::abs(y); });
+        for (int r = 0; r < k; ++r)
+            CHECK(recovered[static_cast<std::size_t>(r)] ==
+                  Approx(lambda[static_cast<std::size_t>(r)]).margin(1e-9 * std::abs(scale)));
     }
 }
