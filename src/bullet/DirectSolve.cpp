@@ -157,6 +157,8 @@ void RagdollSolver::setDirectJoints(bool on) { m_direct->enabled = on; }
 bool RagdollSolver::directJoints() const { return m_direct->enabled; }
 void RagdollSolver::setFrictionThroughGroups(bool on) { m_direct->frictionThroughGroups = on; }
 bool RagdollSolver::frictionThroughGroups() const { return m_direct->frictionThroughGroups; }
+void RagdollSolver::setJointSpace(bool on) { m_direct->jointSpace = on; }
+bool RagdollSolver::jointSpace() const { return m_direct->jointSpace; }
 
 bool RagdollSolver::buildDirect() {
     Direct& d = *m_direct;
@@ -317,8 +319,9 @@ void RagdollSolver::Direct::factorGroups(const btAlignedObjectArray<btSolverBody
         softenRedundantHolds(group, pool);
         // A joint loop makes A singular; a relative regularisation keeps the factor finite.
         const double epsilon = 1e-9 * largest;
-        group.useTree = Direct::factorTree(group, bodyPool, epsilon);
-        if (!group.useTree) {
+        group.useArticulated = jointSpace && Direct::factorArticulated(group, bodyPool);
+        group.useTree = !group.useArticulated && Direct::factorTree(group, bodyPool, epsilon);
+        if (!group.useTree && !group.useArticulated) {
             Mat a = Mat::Zero(n, n);
             for (const auto& at : group.rowsAt)
                 for (const auto& [r1, s1] : at)
@@ -406,7 +409,8 @@ void RagdollSolver::Direct::prepareColumns(const btAlignedObjectArray<btSolverBo
                     continue;
                 }
                 throughGroup = true;
-                treesOnly = treesOnly && groups[static_cast<std::size_t>(g)].useTree;
+                treesOnly = treesOnly && (groups[static_cast<std::size_t>(g)].useTree ||
+                                          groups[static_cast<std::size_t>(g)].useArticulated);
             }
             fr.invEffectiveMass = w; // completed below, or by complete()
             if (!throughGroup) {
@@ -430,7 +434,7 @@ void RagdollSolver::Direct::denseColumns(const btAlignedObjectArray<btSolverBody
         Direct::Group& group = groups[g];
         const std::vector<Direct::Column>& cols = columns[g];
         if (cols.empty()) continue; // no other row touches the group (Eigen's solve of a 0-column matrix is UB)
-        if (group.useTree) {
+        if (group.useTree || group.useArticulated) {
             for (const Direct::Column& col : cols) treeColumn(*col.row, col.side, col.withA, col.withB, bodyPool);
             continue;
         }
@@ -511,6 +515,10 @@ void RagdollSolver::Direct::keepResponse(FreeRow& fr, int s, int xa, const SideJ
 void RagdollSolver::Direct::treeColumn(FreeRow& fr, int s, bool withA, bool withB,
                                        const btAlignedObjectArray<btSolverBody>& bodyPool) {
     Group& group = groups[static_cast<std::size_t>(fr.group[s])];
+    if (group.useArticulated) {
+        articulatedColumn(fr, s, withA, withB, bodyPool);
+        return;
+    }
     const btSolverConstraint& c = *fr.c;
     const std::size_t nb = group.bodies.size();
     const int k = static_cast<int>(group.rows.size());

@@ -1,6 +1,7 @@
 // The direct joint solve's data (Method::directJoints): internal to RagdollSolver, shared by its source files.
 #pragma once
 
+#include <initializer_list>
 #include <span>
 #include <utility>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <Eigen/Dense>
 #include <btBulletDynamicsCommon.h>
 
+#include "ArticulatedTree.h"
 #include "BlockTree.h"
 #include "RowKernels.h"
 #include "afb/bullet/RagdollSolver.h"
@@ -97,6 +99,13 @@ struct RagdollSolver::Direct {
         // the figure has no loop. H = [[M, −Jᵀ], [−J, −C]]; `rowAt` is each joint row's entry in its vectors.
         BlockTree tree;
         bool useTree = false;
+        // The joint-space solve of the same system (ArticulatedTree), used instead of the tree's factor when the
+        // joints are point joints with locked axes and no row is soft: the joints' impulses then come from the
+        // bodies' momentum once the iterations end (articulatedImpulses) rather than from each row's reaction.
+        ArticulatedTree articulated;
+        bool useArticulated = false;
+        std::vector<ArticulatedTree::Body> articulatedBodies;
+        std::vector<ArticulatedTree::Row> articulatedRows;
         std::vector<int> rowAt;
         Vec cfm;           // C's diagonal
         Vec target;        // each row's rhs / jacDiagABInv: the velocity it asks for (fixed for the solve)
@@ -117,6 +126,7 @@ struct RagdollSolver::Direct {
             rows.clear();
             for (auto& at : rowsAt) at.clear();
             useTree = false;
+            useArticulated = false;
             soft = false;
         }
     };
@@ -187,6 +197,14 @@ struct RagdollSolver::Direct {
     static void softenRedundantHolds(Group& group, const btAlignedObjectArray<btSolverConstraint>& pool);
     static bool layOut(Group& group);
     static bool factorTree(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool, double epsilon);
+    // DirectArticulated.cpp: the group's joint-space solve built and factored (false: the caller factors H);
+    // a row's response through it; the joints' impulses of every such group once the iterations end.
+    static bool factorArticulated(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool);
+    void articulatedColumn(FreeRow& fr, int s, bool withA, bool withB,
+                           const btAlignedObjectArray<btSolverBody>& bodyPool);
+    void articulatedImpulses(const btAlignedObjectArray<btSolverBody>& bodyPool,
+                             std::initializer_list<const btAlignedObjectArray<btSolverConstraint>*> pools,
+                             const btAlignedObjectArray<btSolverConstraint>& jointPool);
     // A row's response through one group whose tree is factored (side s's slot; withA, withB: which of its
     // bodies are in the group), its part of Jᵣ u added to the row's invEffectiveMass (still the sum w).
     void treeColumn(FreeRow& fr, int s, bool withA, bool withB, const btAlignedObjectArray<btSolverBody>& bodyPool);
@@ -209,6 +227,7 @@ struct RagdollSolver::Direct {
 
     bool enabled = false;
     bool frictionThroughGroups = false; // Method::frictionThroughFigure
+    bool jointSpace = true;             // setJointSpace: groups of point joints solved in joint space
     int figureIterations = 0;           // Method::figureIterations (0: the rows through groups one at a time)
     int figureSweeps = 0;               // Method::figureSweeps
     double figureTolerance = 0;         // the block's sweeps stop once no row's velocity moves by its root (m²/s²)
@@ -260,7 +279,10 @@ struct RagdollSolver::Direct {
     std::vector<std::vector<Column>> columns; // per group
     std::vector<int> unionParent, groupOfRoot;
     std::vector<double> solveX;
-    std::vector<double> e; // one group's joint errors
+    std::vector<double> e;            // one group's joint errors
+    std::vector<double> articulatedF; // articulatedImpulses()' impulses and velocity changes, 6 per group body
+    std::vector<double> articulatedDv, articulatedLambda;
+    std::vector<char> groupRow; // per joint pool row: a row of a joint-space group
 
     void clear() {
         for (Group& g : live()) g.clear();

@@ -68,6 +68,11 @@ btScalar RagdollSolver::solveGroupCacheFriendlyIterations(btCollisionObject** bo
                 const double* y = m_direct->reactions.data() + fr.reaction[s];
                 for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
             }
+    m_direct->articulatedImpulses(m_tmpSolverBodyPool,
+                                  {&m_tmpSolverNonContactConstraintPool, &m_tmpSolverContactConstraintPool,
+                                   &m_tmpSolverContactFrictionConstraintPool,
+                                   &m_tmpSolverContactRollingFrictionConstraintPool},
+                                  m_tmpSolverNonContactConstraintPool);
     for (const Direct::Group& group : m_direct->live())
         for (std::size_t i = 0; i < group.rows.size(); ++i)
             m_tmpSolverNonContactConstraintPool[group.rows[i].pool].m_appliedImpulse =

@@ -3,7 +3,8 @@
 // mass properties, and the engine's air friction (a fraction of velocity removed each 16 ms step: docs/format.md
 // §3.4) how fast its swing decays. A position pass, a joint solve or a velocity rule that added or removed energy, or
 // changed the inertia the swing sees, shows there. A stack of boxes, each its own ragdoll, resting on the ground: each
-// box rests at the height the boxes below it give, unmoved sideways. Deterministic: fixed 60 Hz step.
+// box rests at the height the boxes below it give, unmoved sideways. A chain hanging at rest: each joint carries the
+// weight of the links below it. Deterministic: fixed 60 Hz step.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include "MethodFixture.h"
 #include "afb/bullet/Method.h"
 #include "afb/bullet/Ragdoll.h"
+#include "afb/bullet/RagdollSolver.h"
 #include "afb/figure/Placement.h"
 #include "afb/sim/Scene.h"
 
@@ -152,4 +154,68 @@ TEST_CASE("stack: four boxes, each its own ragdoll, rest on each other at their 
             }
         }
     }
+}
+
+TEST_CASE("chain: each joint of a chain hanging at rest carries the weight of the links below it",
+          "[bullet][methods]") {
+    // Three 20-unit bars hanging straight down from the world on ball joints at their top ends. At rest every
+    // step's joint impulses hold gravity's velocity: joint k pushes the link below it up with the weight of that
+    // link and every link under it. The direct solve takes these impulses from the bodies' momentum in joint space
+    // and from the rows' reactions on the tree of bodies and joints; both must give the weights.
+    const std::vector<afb::test::TestJoint> joints = {{"origin", -1, 0, 0, 0},
+                                                      {"j1", 0, 0, 0, 100},
+                                                      {"j2", 1, 0, 0, 80},
+                                                      {"j3", 2, 0, 0, 60}};
+    std::string af = "articulatedFigure chain {\n settings { selfCollision 0 }\n";
+    const char* names[] = {"b1", "b2", "b3"};
+    for (int k = 0; k < 3; ++k) {
+        const int top = 100 - 20 * k;
+        af += std::string(" body \"") + names[k] + "\" { joint \"" +
+              (k == 0 ? std::string("origin") : "j" + std::to_string(k + 1)) +
+              "\" model box( ( -1, -1, -20 ), ( 1, 1, 0 ) ) origin ( 0, 0, " + std::to_string(top) + " ) density " +
+              std::to_string(0.2 + 0.1 * k) + " }\n";
+        af += std::string(" ballAndSocketJoint \"s") + std::to_string(k + 1) + "\" { body1 \"" + names[k] +
+              "\" body2 \"" + (k == 0 ? "world" : names[k - 1]) + "\" anchor ( 0, 0, " + std::to_string(top) +
+              " ) friction 0 }\n";
+    }
+    af += "}\n";
+    const auto built = afb::test::buildTestFigure(af, joints);
+    INFO(built.diagnostics.str());
+    REQUIRE(built.figure);
+    for (const std::string name : {"fast", "balanced", "default"})
+        for (const bool jointSpace : {true, false}) {
+            DYNAMIC_SECTION(name << (jointSpace ? ", joint space" : ", tree of bodies and joints")) {
+                afb::sim::Scene scene(*afb::bullet::methodPreset(name), {.gravityMps2 = kG, .ground = false});
+                auto* solver = dynamic_cast<afb::bullet::RagdollSolver*>(scene.world().getConstraintSolver());
+                REQUIRE(solver != nullptr);
+                solver->setJointSpace(jointSpace);
+                afb::bullet::Ragdoll& r =
+                    scene.spawn(afb::bullet::RagdollAsset::create(*built.figure), {.comeToRest = false});
+                REQUIRE(r.bodyCount() == 3);
+                // Each joint's feedback, and the body it holds up (its body1, the link below the anchor).
+                std::vector<btJointFeedback> feedback(static_cast<std::size_t>(r.bulletConstraintCount()));
+                for (int k = 0; k < r.bulletConstraintCount(); ++k)
+                    r.bulletConstraint(k).setJointFeedback(&feedback[static_cast<std::size_t>(k)]);
+                for (int i = 0; i < 30; ++i) scene.step(1.0 / kHz);
+                double below = 0; // the weight of the links from the current one down, N
+                std::vector<double> weights(3);
+                for (int k = 2; k >= 0; --k)
+                    weights[static_cast<std::size_t>(k)] = below += r.rigidBody(k).getMass() * kG;
+                int checked = 0;
+                for (int k = 0; k < r.bulletConstraintCount(); ++k) {
+                    if (r.bulletConstraintRole(k) != afb::bullet::RowRole::Joint) continue;
+                    const btTypedConstraint& c = r.bulletConstraint(k);
+                    for (int b = 0; b < 3; ++b) {
+                        if (&c.getRigidBodyA() != &r.rigidBody(b)) continue;
+                        const btVector3 f = feedback[static_cast<std::size_t>(k)].m_appliedForceBodyA;
+                        INFO("joint above link " << b << ": " << f.x() << ", " << f.y() << ", " << f.z() << " N");
+                        CHECK(f.z() == Approx(weights[static_cast<std::size_t>(b)]).epsilon(1e-3));
+                        CHECK(std::hypot(f.x(), f.y()) < 1e-3 * weights[static_cast<std::size_t>(b)]);
+                        ++checked;
+                    }
+                }
+                CHECK(checked == 3);
+                for (int k = 0; k < r.bulletConstraintCount(); ++k) r.bulletConstraint(k).setJointFeedback(nullptr);
+            }
+        }
 }

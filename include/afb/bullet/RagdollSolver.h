@@ -65,6 +65,14 @@ class RagdollSolver : public btSequentialImpulseConstraintSolver {
     void setFrictionThroughGroups(bool on);
     /// Whether friction rows move the whole group (setFrictionThroughGroups).
     bool frictionThroughGroups() const;
+    /// Under the direct joint solve, a group whose joints are point joints with some rotation axes locked (ball,
+    /// universal, hinge) and whose rows are all stiff is solved in joint space (on, the default): each joint's free
+    /// motions are eliminated rather than its rows, the same system for fewer instructions, and the joints' impulses
+    /// are taken from the bodies' momentum after the iterations. Off: every group is factored as a tree of bodies
+    /// and joints (the results differ by rounding).
+    void setJointSpace(bool on);
+    /// Whether the joint-space path is on (setJointSpace).
+    bool jointSpace() const;
 
     /// The row update of Bullet's iterations (every row that the direct solve does not take): afbullet's SSE one
     /// (on, the default), which rounds bit for bit as Bullet's scalar reference that Debian's Bullet runs, with the
