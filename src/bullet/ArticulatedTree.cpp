@@ -302,17 +302,6 @@ void ArticulatedTree::upJoint(const Joint& j, bool targets) const {
     m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, passed);
 }
 
-// upJoint() without passing to the parent (solveImpulse() walks the path itself).
-template <int F>
-void ArticulatedTree::upJointAlone(const Joint& j) const {
-    using MatS = Eigen::Matrix<double, 6, F>;
-    const auto c = static_cast<std::size_t>(j.child);
-    const Eigen::Map<const MatS> s(j.s.data()), is(j.is.data());
-    const Eigen::Matrix<double, F, 1> y = j.dInv.topLeftCorner<F, F>() * (s.transpose() * m_p[c]);
-    m_y[c].head<F>() = y;
-    m_pt[c].noalias() = m_p[c] - is * y;
-}
-
 // Root to leaves: the child's motion from the parent's carried one w (q̇ = y − K w).
 template <int F>
 Vec6 ArticulatedTree::downJoint(const Joint& j, const Vec6& w) const {
@@ -355,31 +344,39 @@ void ArticulatedTree::impulses(const Joint& j, const Vec6& g, std::span<double> 
     lambda[static_cast<std::size_t>(j.rows[4])] = m[1];
 }
 
-void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
-                            std::span<double> lambda) const {
-    const std::size_t n = m_mass.size();
-    for (std::size_t i = 0; i < n; ++i) m_p[i] = Eigen::Map<const Vec6>(f.data() + 6 * i);
-    const bool targets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
-    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
-        const Joint& j = *it;
-        const auto c = static_cast<std::size_t>(j.child);
-        m_c[c] = targets ? particular(j, e) : Vec6::Zero();
-        if (j.free == 1) upJoint<1>(j, targets);
-        else if (j.free == 2) upJoint<2>(j, targets);
-        else upJoint<3>(j, targets);
-    }
+void ArticulatedTree::up(const Joint& j, bool targets) const {
+    if (j.free == 1) upJoint<1>(j, targets);
+    else if (j.free == 2) upJoint<2>(j, targets);
+    else upJoint<3>(j, targets);
+}
+
+// Root first: each body's motion from its parent's (with the joints' offsets when `targets`), and the joints'
+// impulses when `lambda` is not empty.
+void ArticulatedTree::down(std::span<double> dv, bool targets, std::span<double> lambda) const {
     if (m_root >= 0)
         Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
             m_rootFactor.solve(m_p[static_cast<std::size_t>(m_root)]);
     for (const Joint& j : m_joints) {
         const auto c = static_cast<std::size_t>(j.child);
-        Vec6 w = m_c[c];
+        Vec6 w = targets ? m_c[c] : Vec6::Zero();
         if (j.parent >= 0) w += shift(j.d, Eigen::Map<const Vec6>(dv.data() + 6 * static_cast<std::size_t>(j.parent)));
         Eigen::Map<Vec6>(dv.data() + 6 * c) = j.free == 1   ? downJoint<1>(j, w)
                                               : j.free == 2 ? downJoint<2>(j, w)
                                                             : downJoint<3>(j, w);
         if (!lambda.empty()) impulses(j, j.passed * w - m_pt[c], lambda);
     }
+}
+
+void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
+                            std::span<double> lambda) const {
+    const std::size_t n = m_mass.size();
+    for (std::size_t i = 0; i < n; ++i) m_p[i] = Eigen::Map<const Vec6>(f.data() + 6 * i);
+    const bool targets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
+        if (targets) m_c[static_cast<std::size_t>(it->child)] = particular(*it, e);
+        up(*it, targets);
+    }
+    down(dv, targets, lambda);
 }
 
 void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {
@@ -395,26 +392,10 @@ void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb,
     if (a >= 0) m_p[static_cast<std::size_t>(a)] += fa;
     if (b >= 0) m_p[static_cast<std::size_t>(b)] += fb;
     for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
-        const Joint& j = *it;
-        if (!m_onPath[static_cast<std::size_t>(j.child)]) {
-            m_y[static_cast<std::size_t>(j.child)].setZero();
-            continue;
-        }
-        if (j.free == 1) upJoint<1>(j, false);
-        else if (j.free == 2) upJoint<2>(j, false);
-        else upJoint<3>(j, false);
+        if (m_onPath[static_cast<std::size_t>(it->child)]) up(*it, false);
+        else m_y[static_cast<std::size_t>(it->child)].setZero();
     }
-    if (m_root >= 0)
-        Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
-            m_rootFactor.solve(m_p[static_cast<std::size_t>(m_root)]);
-    for (const Joint& j : m_joints) {
-        const auto c = static_cast<std::size_t>(j.child);
-        Vec6 w = Vec6::Zero();
-        if (j.parent >= 0) w = shift(j.d, Eigen::Map<const Vec6>(dv.data() + 6 * static_cast<std::size_t>(j.parent)));
-        Eigen::Map<Vec6>(dv.data() + 6 * c) = j.free == 1   ? downJoint<1>(j, w)
-                                              : j.free == 2 ? downJoint<2>(j, w)
-                                                            : downJoint<3>(j, w);
-    }
+    down(dv, false, {});
 }
 
 void ArticulatedTree::jointImpulses(std::span<const double> f, std::span<const double> dv,

@@ -79,6 +79,8 @@ class ArticulatedTree {
     void upJointAlone(const Joint& j) const;
     template <int F>
     Vec6 downJoint(const Joint& j, const Vec6& w) const;
+    void up(const Joint& j, bool targets) const;
+    void down(std::span<double> dv, bool targets, std::span<double> lambda) const;
     bool orient(std::span<const Row> rows);
     bool shapeJoint(Joint& j, std::span<const Row> rows);
     Vec6 particular(const Joint& j, std::span<const double> e) const;

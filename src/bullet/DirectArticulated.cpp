@@ -73,8 +73,7 @@ void RagdollSolver::Direct::articulatedImpulses(
     if (!any) return;
     // Every other row's impulse on the groups' bodies (6 per body, at the body's offset among all groups' bodies).
     std::vector<int> firstOf(used + 1, 0);
-    for (std::size_t g = 0; g < used; ++g)
-        firstOf[g + 1] = firstOf[g] + 6 * static_cast<int>(groups[g].bodies.size());
+    for (std::size_t g = 0; g < used; ++g) firstOf[g + 1] = firstOf[g] + 6 * static_cast<int>(groups[g].bodies.size());
     articulatedF.assign(static_cast<std::size_t>(firstOf[used]), 0.0);
     auto add = [&](const btSolverConstraint& c) {
         const double l = double(c.m_appliedImpulse);
@@ -84,8 +83,8 @@ void RagdollSolver::Direct::articulatedImpulses(
             const int g = groupOf[static_cast<std::size_t>(id)];
             if (g < 0 || !groups[static_cast<std::size_t>(g)].useArticulated) continue;
             const SideJ side = s ? sideB(c, bodyPool[id]) : sideA(c, bodyPool[id]);
-            double* f = articulatedF.data() + firstOf[static_cast<std::size_t>(g)] +
-                        6 * localOf[static_cast<std::size_t>(id)];
+            double* f =
+                articulatedF.data() + firstOf[static_cast<std::size_t>(g)] + 6 * localOf[static_cast<std::size_t>(id)];
             for (int q = 0; q < 3; ++q) {
                 f[q] += double(side.lin[q]) * l;
                 f[3 + q] += double(side.ang[q]) * l;
@@ -108,8 +107,8 @@ void RagdollSolver::Direct::articulatedImpulses(
             }
         }
         articulatedLambda.resize(group.rows.size());
-        group.articulated.jointImpulses(
-            std::span<const double>(articulatedF.data() + firstOf[g], 6 * nb), articulatedDv, articulatedLambda);
+        group.articulated.jointImpulses(std::span<const double>(articulatedF.data() + firstOf[g], 6 * nb),
+                                        articulatedDv, articulatedLambda);
         for (std::size_t i = 0; i < group.rows.size(); ++i)
             group.lambda(static_cast<Eigen::Index>(i)) = articulatedLambda[i];
     }
