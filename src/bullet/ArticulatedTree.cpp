@@ -49,16 +49,8 @@ bool leverArm(const Vec3 (&lin)[3], const Vec3 (&ang)[3], bool orthonormal, Vec3
     return true;
 }
 
-// V ↦ T V: the parent's motion carried by the shift d (v + ω × d, ω).
-Vec6 shift(const Vec3& d, const Vec6& v) {
-    Vec6 out;
-    out.head<3>() = v.head<3>() + v.tail<3>().cross(d);
-    out.tail<3>() = v.tail<3>();
-    return out;
-}
-
 // F ↦ Tᵀ F: an impulse at the child carried to the parent's centre of mass (f, τ + d × f).
-Vec6 shiftBack(const Vec3& d, const Vec6& f) {
+[[gnu::always_inline]] inline Vec6 shiftBack(const Vec3& d, const Vec6& f) {
     Vec6 out;
     out.head<3>() = f.head<3>();
     out.tail<3>() = f.tail<3>() + d.cross(f.head<3>());
@@ -267,6 +259,15 @@ bool ArticulatedTree::factorJoint(Joint& j) {
     j.k.topRows<F>().noalias() = dInv * is.transpose();
     j.passed = ia;
     j.passed.noalias() -= is * j.k.topRows<F>();
+    // The solves' kernels, row-major: y = (D⁻¹ Sᵀ) p, p̃ = p − (I S) y, q̇ = y − K w, Δv = w + S q̇.
+    const Eigen::Matrix<double, F, 6> kp = dInv * s.transpose();
+    for (int i = 0; i < F; ++i)
+        for (int q = 0; q < 6; ++q) {
+            j.kernels.kp[i][q] = kp(i, q);
+            j.kernels.k[i][q] = j.k(i, q);
+            j.kernels.is[q][i] = is(q, i);
+            j.kernels.s[q][i] = s(q, i);
+        }
     return true;
 }
 
@@ -283,32 +284,61 @@ bool ArticulatedTree::factor() {
         if (j.parent >= 0) m_ia[static_cast<std::size_t>(j.parent)] += shiftInertia(j.d, j.passed);
     }
     if (m_root < 0) return true;
-    m_rootFactor.compute(m_ia[static_cast<std::size_t>(m_root)]);
-    return m_rootFactor.info() == Eigen::Success;
+    // The root's inverse, kept whole: every solve then multiplies by it (a 6×6 product, no division).
+    const Eigen::LLT<Mat6> llt(m_ia[static_cast<std::size_t>(m_root)]);
+    if (llt.info() != Eigen::Success) return false;
+    m_rootInverse = llt.solve(Mat6::Identity());
+    return m_rootInverse.allFinite();
 }
 
 // Leaves to root: the joint's free part of its child's bias impulse (y = D⁻¹ Sᵀ p), the rest passed to the parent.
 template <int F>
-void ArticulatedTree::upJoint(const Joint& j, bool targets) const {
-    using MatS = Eigen::Matrix<double, 6, F>;
+[[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, bool targets) const {
     const auto c = static_cast<std::size_t>(j.child);
-    const Eigen::Map<const MatS> s(j.s.data()), is(j.is.data());
-    const Eigen::Matrix<double, F, 1> y = j.dInv.topLeftCorner<F, F>() * (s.transpose() * m_p[c]);
-    m_y[c].head<F>() = y;
-    m_pt[c].noalias() = m_p[c] - is * y;
+    const Joint::Kernels& kn = j.kernels;
+    const double* p = m_p[c].data();
+    double* y = m_y[c].data();
+    double* pt = m_pt[c].data();
+    for (int i = 0; i < F; ++i) {
+        double sum = 0;
+        for (int q = 0; q < 6; ++q) sum += kn.kp[i][q] * p[q];
+        y[i] = sum;
+    }
+    for (int q = 0; q < 6; ++q) {
+        double sum = p[q];
+        for (int i = 0; i < F; ++i) sum -= kn.is[q][i] * y[i];
+        pt[q] = sum;
+    }
     if (j.parent < 0) return;
     Vec6 passed = m_pt[c];
     if (targets) passed.noalias() -= j.passed * m_c[c];
-    m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, passed);
+    // Tᵀ: the force as it is, its moment about the parent's centre added to the torque.
+    double* pp = m_p[static_cast<std::size_t>(j.parent)].data();
+    const double* d = j.d.data();
+    pp[0] += passed[0];
+    pp[1] += passed[1];
+    pp[2] += passed[2];
+    pp[3] += passed[3] + d[1] * passed[2] - d[2] * passed[1];
+    pp[4] += passed[4] + d[2] * passed[0] - d[0] * passed[2];
+    pp[5] += passed[5] + d[0] * passed[1] - d[1] * passed[0];
 }
 
-// Root to leaves: the child's motion from the parent's carried one w (q̇ = y − K w).
+// Root to leaves: the child's motion from the parent's carried one w (q̇ = y − K w), written to `out`.
 template <int F>
-Vec6 ArticulatedTree::downJoint(const Joint& j, const Vec6& w) const {
-    using MatS = Eigen::Matrix<double, 6, F>;
-    const Eigen::Map<const MatS> s(j.s.data());
-    const Eigen::Matrix<double, F, 1> qd = m_y[static_cast<std::size_t>(j.child)].head<F>() - j.k.topRows<F>() * w;
-    return w + s * qd;
+[[gnu::always_inline]] inline void ArticulatedTree::downJoint(const Joint& j, const double* w, double* out) const {
+    const Joint::Kernels& kn = j.kernels;
+    const double* y = m_y[static_cast<std::size_t>(j.child)].data();
+    double qd[F];
+    for (int i = 0; i < F; ++i) {
+        double sum = y[i];
+        for (int q = 0; q < 6; ++q) sum -= kn.k[i][q] * w[q];
+        qd[i] = sum;
+    }
+    for (int q = 0; q < 6; ++q) {
+        double sum = w[q];
+        for (int i = 0; i < F; ++i) sum += kn.s[q][i] * qd[i];
+        out[q] = sum;
+    }
 }
 
 // A child's motion c that meets the joint's rows asking e on their own (J_c c = e): the locked rows by a turn
@@ -355,15 +385,28 @@ void ArticulatedTree::up(const Joint& j, bool targets) const {
 void ArticulatedTree::down(std::span<double> dv, bool targets, std::span<double> lambda) const {
     if (m_root >= 0)
         Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
-            m_rootFactor.solve(m_p[static_cast<std::size_t>(m_root)]);
+            m_rootInverse * m_p[static_cast<std::size_t>(m_root)];
     for (const Joint& j : m_joints) {
         const auto c = static_cast<std::size_t>(j.child);
-        Vec6 w = targets ? m_c[c] : Vec6::Zero();
-        if (j.parent >= 0) w += shift(j.d, Eigen::Map<const Vec6>(dv.data() + 6 * static_cast<std::size_t>(j.parent)));
-        Eigen::Map<Vec6>(dv.data() + 6 * c) = j.free == 1   ? downJoint<1>(j, w)
-                                              : j.free == 2 ? downJoint<2>(j, w)
-                                                            : downJoint<3>(j, w);
-        if (!lambda.empty()) impulses(j, j.passed * w - m_pt[c], lambda);
+        // w = T Δv_parent (+ the joint's offset): v + ω × d, ω.
+        double w[6] = {0, 0, 0, 0, 0, 0};
+        if (targets)
+            for (int q = 0; q < 6; ++q) w[q] = m_c[c][q];
+        if (j.parent >= 0) {
+            const double* v = dv.data() + 6 * static_cast<std::size_t>(j.parent);
+            const double* d = j.d.data();
+            w[0] += v[0] + v[4] * d[2] - v[5] * d[1];
+            w[1] += v[1] + v[5] * d[0] - v[3] * d[2];
+            w[2] += v[2] + v[3] * d[1] - v[4] * d[0];
+            w[3] += v[3];
+            w[4] += v[4];
+            w[5] += v[5];
+        }
+        double* out = dv.data() + 6 * c;
+        if (j.free == 1) downJoint<1>(j, w, out);
+        else if (j.free == 2) downJoint<2>(j, w, out);
+        else downJoint<3>(j, w, out);
+        if (!lambda.empty()) impulses(j, j.passed * Eigen::Map<const Vec6>(w) - m_pt[c], lambda);
     }
 }
 

@@ -70,15 +70,19 @@ class ArticulatedTree {
         Eigen::Matrix3d dInv;
         Eigen::Matrix<double, 3, 6> k; // D⁻¹ (I S)ᵀ
         Mat6 passed;
+        struct Kernels {     // the same, row-major, for the solves' loops
+            double kp[3][6]; // D⁻¹ Sᵀ
+            double k[3][6];  // D⁻¹ (I S)ᵀ
+            double is[6][3]; // I S
+            double s[6][3];  // S
+        } kernels{};
     };
     template <int F>
     bool factorJoint(Joint& j);
     template <int F>
     void upJoint(const Joint& j, bool targets) const;
     template <int F>
-    void upJointAlone(const Joint& j) const;
-    template <int F>
-    Vec6 downJoint(const Joint& j, const Vec6& w) const;
+    void downJoint(const Joint& j, const double* w, double* out) const;
     void up(const Joint& j, bool targets) const;
     void down(std::span<double> dv, bool targets, std::span<double> lambda) const;
     bool orient(std::span<const Row> rows);
@@ -90,11 +94,11 @@ class ArticulatedTree {
     bool m_valid = false;
     std::vector<double> m_mass;
     std::vector<Eigen::Matrix3d> m_inertia;
-    std::vector<Joint> m_joints; // root first
-    std::vector<int> m_jointOf;  // per body: its joint (−1: the free root)
-    int m_root = -1;             // the free root body (−1: the tree hangs from the world)
-    std::vector<Mat6> m_ia;      // factor(): articulated inertias
-    Eigen::LLT<Mat6> m_rootFactor;
+    std::vector<Joint> m_joints;              // root first
+    std::vector<int> m_jointOf;               // per body: its joint (−1: the free root)
+    int m_root = -1;                          // the free root body (−1: the tree hangs from the world)
+    std::vector<Mat6> m_ia;                   // factor(): articulated inertias
+    Mat6 m_rootInverse;                       // factor(): the free root's articulated inertia, inverted
     mutable std::vector<Vec6> m_p, m_pt, m_c; // solve()'s scratch: bias impulses, their part through the joint, offsets
     mutable std::vector<Eigen::Vector3d> m_y; // D⁻¹ Sᵀ p per joint
     mutable std::vector<char> m_onPath;       // solveImpulse()'s bodies on a path to the root
