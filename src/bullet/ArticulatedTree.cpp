@@ -231,9 +231,6 @@ bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows) {
     }
     j.free = 3 - j.locked;
     j.s.setZero();
-    j.is.setZero();
-    j.dInv.setZero();
-    j.k.setZero();
     for (int i = 0; i < j.free; ++i) {
         j.s.block<3, 1>(0, i) = j.rc.cross(axes.col(i));
         j.s.block<3, 1>(3, i) = axes.col(i);
@@ -247,24 +244,22 @@ bool ArticulatedTree::factorJoint(Joint& j) {
     using MatS = Eigen::Matrix<double, 6, F>;
     const Eigen::Map<const MatS> s(j.s.data());
     const Mat6& ia = m_ia[static_cast<std::size_t>(j.child)];
-    Eigen::Map<MatS> is(j.is.data());
-    is.noalias() = ia * s;
+    const MatS is = ia * s;
     const Eigen::Matrix<double, F, F> d = s.transpose() * is;
     Eigen::Matrix<double, F, F> dInv;
     bool invertible = d(0, 0) > 0;
     if constexpr (F == 1) dInv(0, 0) = 1.0 / d(0, 0);
     else d.computeInverseWithCheck(dInv, invertible);
     if (!invertible || !(dInv.diagonal().minCoeff() > 0)) return false;
-    j.dInv.topLeftCorner<F, F>() = dInv;
-    j.k.topRows<F>().noalias() = dInv * is.transpose();
+    const Eigen::Matrix<double, F, 6> k = dInv * is.transpose();
     j.passed = ia;
-    j.passed.noalias() -= is * j.k.topRows<F>();
+    j.passed.noalias() -= is * k;
     // The solves' kernels, row-major: y = (D⁻¹ Sᵀ) p, p̃ = p − (I S) y, q̇ = y − K w, Δv = w + S q̇.
     const Eigen::Matrix<double, F, 6> kp = dInv * s.transpose();
     for (int i = 0; i < F; ++i)
         for (int q = 0; q < 6; ++q) {
             j.kernels.kp[i][q] = kp(i, q);
-            j.kernels.k[i][q] = j.k(i, q);
+            j.kernels.k[i][q] = k(i, q);
             j.kernels.is[q][i] = is(q, i);
             j.kernels.s[q][i] = s(q, i);
         }

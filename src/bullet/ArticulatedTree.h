@@ -65,12 +65,9 @@ class ArticulatedTree {
         Eigen::Matrix<double, 3, 2> u; // locked axes at the child
         Eigen::Matrix2d uGram;         // (UᵀU)⁻¹ of the locked axes
         Eigen::Matrix<double, 6, 3> s; // the free motions of the child (first `free` columns)
-        // factor(): I·S, D⁻¹ = (SᵀIS)⁻¹, and the inertia the joint passes to the parent (before the shift).
-        Eigen::Matrix<double, 6, 3> is;
-        Eigen::Matrix3d dInv;
-        Eigen::Matrix<double, 3, 6> k; // D⁻¹ (I S)ᵀ
+        // factor(): the inertia the joint passes to the parent (before the shift), and the solves' kernels.
         Mat6 passed;
-        struct Kernels {     // the same, row-major, for the solves' loops
+        struct Kernels {     // row-major, for the solves' loops
             double kp[3][6]; // D⁻¹ Sᵀ
             double k[3][6];  // D⁻¹ (I S)ᵀ
             double is[6][3]; // I S

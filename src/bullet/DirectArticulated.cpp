@@ -72,7 +72,8 @@ void RagdollSolver::Direct::articulatedImpulses(
     }
     if (!any) return;
     // Every other row's impulse on the groups' bodies (6 per body, at the body's offset among all groups' bodies).
-    std::vector<int> firstOf(used + 1, 0);
+    std::vector<int>& firstOf = articulatedFirst;
+    firstOf.assign(used + 1, 0);
     for (std::size_t g = 0; g < used; ++g) firstOf[g + 1] = firstOf[g] + 6 * static_cast<int>(groups[g].bodies.size());
     articulatedF.assign(static_cast<std::size_t>(firstOf[used]), 0.0);
     auto add = [&](const btSolverConstraint& c) {

@@ -282,7 +282,8 @@ struct RagdollSolver::Direct {
     std::vector<double> e;            // one group's joint errors
     std::vector<double> articulatedF; // articulatedImpulses()' impulses and velocity changes, 6 per group body
     std::vector<double> articulatedDv, articulatedLambda;
-    std::vector<char> groupRow; // per joint pool row: a row of a joint-space group
+    std::vector<int> articulatedFirst; // per group: its bodies' first entry in articulatedF
+    std::vector<char> groupRow;        // per joint pool row: a row of a joint-space group
 
     void clear() {
         for (Group& g : live()) g.clear();
