@@ -74,6 +74,8 @@ Mat6 shiftInertia(const Vec3& d, const Mat6& p) {
 } // namespace
 
 bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> rows) {
+    m_hasTargets = false;
+    m_target.clear();
     m_mass.clear();
     m_inertia.clear();
     for (const Body& b : bodies) {
@@ -166,6 +168,7 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
     m_p.resize(static_cast<std::size_t>(n));
     m_pt.resize(static_cast<std::size_t>(n));
     m_c.resize(static_cast<std::size_t>(n));
+    m_cp.resize(static_cast<std::size_t>(n));
     m_y.resize(static_cast<std::size_t>(n));
     return true;
 }
@@ -288,7 +291,7 @@ bool ArticulatedTree::factor() {
 
 // Leaves to root: the joint's free part of its child's bias impulse (y = D⁻¹ Sᵀ p), the rest passed to the parent.
 template <int F>
-[[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, bool targets) const {
+[[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, const Vec6* passedOffset) const {
     const auto c = static_cast<std::size_t>(j.child);
     const Joint::Kernels& kn = j.kernels;
     const double* p = m_p[c].data();
@@ -306,7 +309,7 @@ template <int F>
     }
     if (j.parent < 0) return;
     Vec6 passed = m_pt[c];
-    if (targets) passed.noalias() -= j.passed * m_c[c];
+    if (passedOffset) passed -= passedOffset[c];
     // Tᵀ: the force as it is, its moment about the parent's centre added to the torque.
     double* pp = m_p[static_cast<std::size_t>(j.parent)].data();
     const double* d = j.d.data();
@@ -369,15 +372,16 @@ void ArticulatedTree::impulses(const Joint& j, const Vec6& g, std::span<double> 
     lambda[static_cast<std::size_t>(j.rows[4])] = m[1];
 }
 
-void ArticulatedTree::up(const Joint& j, bool targets) const {
-    if (j.free == 1) upJoint<1>(j, targets);
-    else if (j.free == 2) upJoint<2>(j, targets);
-    else upJoint<3>(j, targets);
+void ArticulatedTree::up(const Joint& j, const std::vector<Vec6>* passedOffsets) const {
+    const Vec6* po = passedOffsets ? passedOffsets->data() : nullptr;
+    if (j.free == 1) upJoint<1>(j, po);
+    else if (j.free == 2) upJoint<2>(j, po);
+    else upJoint<3>(j, po);
 }
 
-// Root first: each body's motion from its parent's (with the joints' offsets when `targets`), and the joints'
-// impulses when `lambda` is not empty.
-void ArticulatedTree::down(std::span<double> dv, bool targets, std::span<double> lambda) const {
+// Root first: each body's motion from its parent's (with the joints' `offsets` when there are targets), and the
+// joints' impulses when `lambda` is not empty.
+void ArticulatedTree::down(std::span<double> dv, const std::vector<Vec6>* offsets, std::span<double> lambda) const {
     if (m_root >= 0)
         Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
             m_rootInverse * m_p[static_cast<std::size_t>(m_root)];
@@ -385,8 +389,8 @@ void ArticulatedTree::down(std::span<double> dv, bool targets, std::span<double>
         const auto c = static_cast<std::size_t>(j.child);
         // w = T Δv_parent (+ the joint's offset): v + ω × d, ω.
         double w[6] = {0, 0, 0, 0, 0, 0};
-        if (targets)
-            for (int q = 0; q < 6; ++q) w[q] = m_c[c][q];
+        if (offsets)
+            for (int q = 0; q < 6; ++q) w[q] = (*offsets)[c][q];
         if (j.parent >= 0) {
             const double* v = dv.data() + 6 * static_cast<std::size_t>(j.parent);
             const double* d = j.d.data();
@@ -405,16 +409,41 @@ void ArticulatedTree::down(std::span<double> dv, bool targets, std::span<double>
     }
 }
 
+void ArticulatedTree::offsetsOf(std::span<const double> e, std::vector<Vec6>& offsets,
+                                std::vector<Vec6>& passedOffsets) const {
+    offsets.resize(m_mass.size());
+    passedOffsets.resize(m_mass.size());
+    for (const Joint& j : m_joints) {
+        const auto c = static_cast<std::size_t>(j.child);
+        offsets[c] = particular(j, e);
+        passedOffsets[c].noalias() = j.passed * offsets[c];
+    }
+}
+
 void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
                             std::span<double> lambda) const {
     const std::size_t n = m_mass.size();
     for (std::size_t i = 0; i < n; ++i) m_p[i] = Eigen::Map<const Vec6>(f.data() + 6 * i);
     const bool targets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
-    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
-        if (targets) m_c[static_cast<std::size_t>(it->child)] = particular(*it, e);
-        up(*it, targets);
+    if (targets) offsetsOf(e, m_c, m_cp);
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, targets ? &m_cp : nullptr);
+    down(dv, targets ? &m_c : nullptr, lambda);
+}
+
+void ArticulatedTree::setTargets(std::span<const double> e) {
+    m_hasTargets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
+    if (m_hasTargets) offsetsOf(e, m_target, m_targetPassed);
+}
+
+void ArticulatedTree::project(std::span<double> dv) const {
+    // The bodies' momentum M dv as the impulses of solve().
+    for (std::size_t i = 0; i < m_mass.size(); ++i) {
+        const Eigen::Map<const Vec6> v(dv.data() + 6 * i);
+        m_p[i].head<3>() = m_mass[i] * v.head<3>();
+        m_p[i].tail<3>().noalias() = m_inertia[i] * v.tail<3>();
     }
-    down(dv, targets, lambda);
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, m_hasTargets ? &m_targetPassed : nullptr);
+    down(dv, m_hasTargets ? &m_target : nullptr, {});
 }
 
 void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {
@@ -430,10 +459,10 @@ void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb,
     if (a >= 0) m_p[static_cast<std::size_t>(a)] += fa;
     if (b >= 0) m_p[static_cast<std::size_t>(b)] += fb;
     for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) {
-        if (m_onPath[static_cast<std::size_t>(it->child)]) up(*it, false);
+        if (m_onPath[static_cast<std::size_t>(it->child)]) up(*it, nullptr);
         else m_y[static_cast<std::size_t>(it->child)].setZero();
     }
-    down(dv, false, {});
+    down(dv, nullptr, {});
 }
 
 void ArticulatedTree::jointImpulses(std::span<const double> f, std::span<const double> dv,

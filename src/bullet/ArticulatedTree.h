@@ -42,6 +42,14 @@ class ArticulatedTree {
     void solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
                std::span<double> lambda) const;
 
+    /// Fixes the rows' targets `e` (one per row, in build()'s order) for project(): each joint's particular motion
+    /// and the impulse it passes to its parent are taken once, not at every projection.
+    void setTargets(std::span<const double> e);
+    /// The velocity changes `dv` (6 per body) replaced by the nearest, in the mass metric, that meet setTargets'
+    /// targets: solve() with f = M dv, so M dv′ = M dv + Jᵀλ and J dv′ = e. No row's velocity is read: an iteration
+    /// that restores the joints costs one pass up and one down.
+    void project(std::span<double> dv) const;
+
     /// solve() for impulses `fa` on body a and `fb` on body b (−1: none) and no joint targets, without the joints'
     /// impulses: a row's column through the figure. Only the paths from a and b to the root carry the impulses up.
     void solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const;
@@ -77,11 +85,14 @@ class ArticulatedTree {
     template <int F>
     bool factorJoint(Joint& j);
     template <int F>
-    void upJoint(const Joint& j, bool targets) const;
+    void upJoint(const Joint& j, const Vec6* passedOffset) const;
     template <int F>
     void downJoint(const Joint& j, const double* w, double* out) const;
-    void up(const Joint& j, bool targets) const;
-    void down(std::span<double> dv, bool targets, std::span<double> lambda) const;
+    // `offsets`: per body, the particular motion of its joint and (`passedOffsets`) the impulse that passes on;
+    // null: no targets.
+    void up(const Joint& j, const std::vector<Vec6>* passedOffsets) const;
+    void down(std::span<double> dv, const std::vector<Vec6>* offsets, std::span<double> lambda) const;
+    void offsetsOf(std::span<const double> e, std::vector<Vec6>& offsets, std::vector<Vec6>& passedOffsets) const;
     bool orient(std::span<const Row> rows);
     bool shapeJoint(Joint& j, std::span<const Row> rows);
     Vec6 particular(const Joint& j, std::span<const double> e) const;
@@ -91,12 +102,15 @@ class ArticulatedTree {
     bool m_valid = false;
     std::vector<double> m_mass;
     std::vector<Eigen::Matrix3d> m_inertia;
-    std::vector<Joint> m_joints;              // root first
-    std::vector<int> m_jointOf;               // per body: its joint (−1: the free root)
-    int m_root = -1;                          // the free root body (−1: the tree hangs from the world)
-    std::vector<Mat6> m_ia;                   // factor(): articulated inertias
-    Mat6 m_rootInverse;                       // factor(): the free root's articulated inertia, inverted
-    mutable std::vector<Vec6> m_p, m_pt, m_c; // solve()'s scratch: bias impulses, their part through the joint, offsets
+    std::vector<Joint> m_joints;                // root first
+    std::vector<int> m_jointOf;                 // per body: its joint (−1: the free root)
+    int m_root = -1;                            // the free root body (−1: the tree hangs from the world)
+    std::vector<Mat6> m_ia;                     // factor(): articulated inertias
+    Mat6 m_rootInverse;                         // factor(): the free root's articulated inertia, inverted
+    mutable std::vector<Vec6> m_p, m_pt;        // the solves' scratch: bias impulses, their part through the joint
+    mutable std::vector<Vec6> m_c, m_cp;        // solve()'s offsets (particular motions) and what they pass on
+    std::vector<Vec6> m_target, m_targetPassed; // setTargets()'s
+    bool m_hasTargets = false;
     mutable std::vector<Eigen::Vector3d> m_y; // D⁻¹ Sᵀ p per joint
     mutable std::vector<char> m_onPath;       // solveImpulse()'s bodies on a path to the root
 };

@@ -15,6 +15,30 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
                                           const btAlignedObjectArray<btSolverConstraint>& pool) {
     double residual = 0;
     for (Group& group : live()) {
+        if (group.useArticulated) {
+            // The velocity changes projected onto the rows' targets, M Δv′ = M Δv + Jᵀλ and J Δv′ = target, without
+            // reading a row (the impulses follow from the momentum at the end). The solve is exact: the residual
+            // the joints leave is the other rows' disturbance, which their own residual measures.
+            const std::size_t nb = group.bodies.size();
+            solveX.resize(6 * nb);
+            for (std::size_t xb = 0; xb < nb; ++xb) {
+                const btSolverBody& b = bodyPool[group.bodies[xb]];
+                double* dv = solveX.data() + 6 * xb;
+                for (int q = 0; q < 3; ++q) {
+                    dv[q] = double(b.m_deltaLinearVelocity[q]);
+                    dv[3 + q] = double(b.m_deltaAngularVelocity[q]);
+                }
+            }
+            group.articulated.project(solveX);
+            if (!std::all_of(solveX.begin(), solveX.end(), [](double v) { return std::isfinite(v); })) continue;
+            for (std::size_t xb = 0; xb < nb; ++xb) {
+                btSolverBody& b = bodyPool[group.bodies[xb]];
+                const double* dv = solveX.data() + 6 * xb;
+                b.m_deltaLinearVelocity = btVector3(btScalar(dv[0]), btScalar(dv[1]), btScalar(dv[2]));
+                b.m_deltaAngularVelocity = btVector3(btScalar(dv[3]), btScalar(dv[4]), btScalar(dv[5]));
+            }
+            continue;
+        }
         const Eigen::Index n = static_cast<Eigen::Index>(group.rows.size());
         e.resize(static_cast<std::size_t>(n));
         Eigen::Map<Vec> err(e.data(), n);
@@ -25,21 +49,6 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
             largest = std::max(largest, err(i) * err(i));
         }
         residual = largest;
-        if (group.useArticulated) {
-            // M Δv = Jᵀ Δλ, J Δv = e: the velocity changes alone (the impulses follow from the momentum at the end).
-            const std::size_t nb = group.bodies.size();
-            scratch.assign(6 * nb, 0.0);
-            solveX.resize(6 * nb);
-            group.articulated.solve(scratch, e, solveX, {});
-            if (!std::all_of(solveX.begin(), solveX.end(), [](double v) { return std::isfinite(v); })) continue;
-            for (std::size_t xb = 0; xb < nb; ++xb) {
-                btSolverBody& b = bodyPool[group.bodies[xb]];
-                const double* dv = solveX.data() + 6 * xb;
-                b.m_deltaLinearVelocity += btVector3(btScalar(dv[0]), btScalar(dv[1]), btScalar(dv[2]));
-                b.m_deltaAngularVelocity += btVector3(btScalar(dv[3]), btScalar(dv[4]), btScalar(dv[5]));
-            }
-            continue;
-        }
         if (group.useTree) {
             // H [Δv; Δλ] = [0; −e]: the bodies' velocity changes come out with the impulses.
             scratch.assign(static_cast<std::size_t>(group.tree.size()), 0.0);

@@ -320,6 +320,7 @@ void RagdollSolver::Direct::factorGroups(const btAlignedObjectArray<btSolverBody
         // A joint loop makes A singular; a relative regularisation keeps the factor finite.
         const double epsilon = 1e-9 * largest;
         group.useArticulated = jointSpace && Direct::factorArticulated(group, bodyPool);
+        if (group.useArticulated) group.articulated.setTargets(std::span<const double>(group.target.data(), n));
         group.useTree = !group.useArticulated && Direct::factorTree(group, bodyPool, epsilon);
         if (!group.useTree && !group.useArticulated) {
             Mat a = Mat::Zero(n, n);

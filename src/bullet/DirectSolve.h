@@ -160,7 +160,8 @@ struct RagdollSolver::Direct {
                          btAlignedObjectArray<btSolverConstraint>& frictionPool);
     void prepareColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
     void denseColumns(const btAlignedObjectArray<btSolverBody>& bodyPool);
-    // The iterations' parts (DirectIterations.cpp): the exact joint solve of every group (its residual); the
+    // The iterations' parts (DirectIterations.cpp): the exact joint solve of every group (its residual: the joint
+    // rows' velocity error it met; none for a group solved in joint space, which reads no row); the
     // application of an impulse dl to a free row; the rows through the groups as one
     // block, `figureSweeps` sweeps over their couplings (FigureBlock.cpp); each returns its largest residual.
     double solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,

@@ -129,6 +129,49 @@ TEST_CASE("articulated tree: the joint-space solve gives the dense solve's veloc
     }
 }
 
+TEST_CASE("articulated tree: projecting velocities onto the joints' targets gives the dense solve with the "
+          "bodies' momentum as the impulse",
+          "[bullet][direct]") {
+    // project(dv) with targets e: M dv′ = M dv + Jᵀλ, J dv′ = e; set once, the targets serve every projection.
+    std::mt19937 rng(20261130);
+    for (int trial = 0; trial < 45; ++trial) {
+        const int n = 1 + trial % 15;
+        const Figure fig = randomFigure(n, trial % 3 == 0, rng);
+        ArticulatedTree tree;
+        REQUIRE(tree.build(fig.bodies, fig.rows));
+        REQUIRE(tree.factor());
+        const int k = static_cast<int>(fig.rows.size());
+        Eigen::VectorXd e(k);
+        for (int i = 0; i < k; ++i) e[i] = trial % 5 == 4 ? 0.0 : std::uniform_real_distribution<double>(-1, 1)(rng);
+        tree.setTargets(std::span<const double>(e.data(), static_cast<std::size_t>(k)));
+        for (int round = 0; round < 2; ++round) {
+            std::vector<double> dv(static_cast<std::size_t>(6 * n));
+            for (double& v : dv) v = std::uniform_real_distribution<double>(-3, 3)(rng);
+            Eigen::VectorXd momentum(6 * n);
+            for (int i = 0; i < n; ++i) {
+                const auto& body = fig.bodies[static_cast<std::size_t>(i)];
+                const Eigen::Map<const Vec3> lin(dv.data() + 6 * i), ang(dv.data() + 6 * i + 3);
+                momentum.segment<3>(6 * i) = body.mass * lin;
+                momentum.segment<3>(6 * i + 3) = body.inertia * ang;
+            }
+            tree.project(dv);
+            const Eigen::VectorXd ref = denseSolve(fig, momentum, e);
+            const double scale = ref.head(6 * n).cwiseAbs().maxCoeff();
+            INFO("trial " << trial << " round " << round << ", " << n << " bodies, " << k << " rows");
+            for (int i = 0; i < 6 * n; ++i)
+                CHECK(dv[static_cast<std::size_t>(i)] == Approx(ref[i]).margin(1e-9 * scale));
+            // The rows meet their targets.
+            for (int r = 0; r < k; ++r) {
+                const ArticulatedTree::Row& row = fig.rows[static_cast<std::size_t>(r)];
+                double v = 0;
+                for (const auto& [body, j] : {std::pair{row.a, row.ja}, std::pair{row.b, row.jb}})
+                    if (body >= 0) v += j.dot(Eigen::Map<const Vec6>(dv.data() + 6 * body));
+                CHECK(v == Approx(e[r]).margin(1e-9 * std::max(1.0, scale)));
+            }
+        }
+    }
+}
+
 TEST_CASE("articulated tree: a body hung from the world by a hinge turns about the hinge alone", "[bullet][direct]") {
     // A rod of 2 kg, 1 m long along x, hinged about z at its end: an impulse of 1 N·s along y at its centre
     // turns it about the hinge with ω = J·p / (I_end) where I_end = m·L²/3, and moves its centre at ω·L/2.
