@@ -26,6 +26,7 @@ struct Side {
     btScalar invMass = 0;
     btMatrix3x3 invInertia{0, 0, 0, 0, 0, 0, 0, 0, 0}; ///< world
     bool moved = false;
+    unsigned version = 0;  ///< how many times the pass has moved it (a check it passed holds until this changes)
     btVector3 x0{0, 0, 0}; ///< the pose the pass started from
     btQuaternion q0 = btQuaternion::getIdentity();
 
@@ -72,6 +73,7 @@ inline void move(Side& s, const btVector3& dx, const btVector3& dtheta) {
     s.q.normalize();
     s.updateRotation();
     s.moved = true;
+    ++s.version;
 }
 
 // Inverse effective mass of a point fixed in a body at offset r: Δ(point) = K·P for an impulse P at the point.

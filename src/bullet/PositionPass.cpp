@@ -146,17 +146,31 @@ bool projectContact(Side& a, Side& b, const btManifoldPoint& cp) {
     return true;
 }
 
+// The versions of a check's sides when it last found nothing to correct (0: not yet). Every check is a function of
+// its sides' poses and of what stays fixed through the pass, so it finds nothing again until one side has moved:
+// a sweep skips it till then, and the sweep that confirms the pass is done costs next to nothing.
+struct Settled {
+    unsigned a = 0, b = 0;
+    bool holds(const Side& sa, const Side& sb) const { return a == sa.version + 1 && b == sb.version + 1; }
+    void set(const Side& sa, const Side& sb) {
+        a = sa.version + 1;
+        b = sb.version + 1;
+    }
+};
+
 // One contact manifold touching the ragdoll, with its sides (null: immovable).
 struct ContactSides {
     btPersistentManifold* manifold;
     Side* a;
     Side* b;
+    Settled settled[MANIFOLD_CACHE_SIZE]{}; // per point
 };
 
 // A static plane (the ground) that a body of the ragdoll has manifolds with.
 struct PlaneContact {
     Side* side;
     const btCollisionObject* plane;
+    Settled settled{};
 };
 
 // The point of `shape` (at `world`) deepest along −normal, and its height along normal. A compound's deepest
@@ -226,6 +240,7 @@ struct Stick {
     btVector3 local; ///< the point in the body's frame
     btVector3 world; ///< where it was when the pass began
     btVector3 normal;
+    Settled settled{};
 };
 
 // Static friction at the position level: the point goes back to where it was along the contact plane (the
@@ -278,6 +293,7 @@ struct Scratch {
     std::vector<ContactSides> contacts;
     std::vector<PlaneContact> planes;
     std::vector<Stick> sticks;
+    std::vector<Settled> settledJoints; // per figure constraint
     std::vector<char> grounded;
     std::vector<JointTree::Joint> joints;
     JointTree tree;
@@ -330,7 +346,7 @@ void Pass::gather(std::span<btPersistentManifold* const> manifolds) {
     for (btPersistentManifold* m : manifolds) {
         Side* a = sideFor(m->getBody0());
         Side* b = sideFor(m->getBody1());
-        if (a || b) contacts.push_back({m, a, b});
+        if (a || b) contacts.push_back({m, a, b, {}});
     }
     // Static planes touching the ragdoll's bodies, once per pair (continuous collision adds a second manifold).
     std::vector<PlaneContact>& planes = m_s.planes;
@@ -342,7 +358,7 @@ void Pass::gather(std::span<btPersistentManifold* const> manifolds) {
         if (other->getCollisionShape()->getShapeType() != STATIC_PLANE_PROXYTYPE) continue;
         if (std::none_of(planes.begin(), planes.end(),
                          [&](const PlaneContact& p) { return p.side == side && p.plane == other; }))
-            planes.push_back({side, other});
+            planes.push_back({side, other, {}});
     }
     gatherSticks();
 }
@@ -365,7 +381,7 @@ void Pass::gatherSticks() {
             const btVector3 local = cs.a ? cp.m_localPointA : cp.m_localPointB;
             const btVector3 at = side->transform() * local;
             if (side->body->getVelocityInLocalPoint(at - side->x).length() > kStickSpeedMps) continue;
-            sticks.push_back({side, local, at, cp.m_normalWorldOnB});
+            sticks.push_back({side, local, at, cp.m_normalWorldOnB, {}});
         }
     }
 }
@@ -440,29 +456,46 @@ bool Pass::sweep() {
         Side& a = m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body1))];
         Side& b = c.body2 >= 0 ? m_bodies[static_cast<std::size_t>(m_r.rigidIndexOf(c.body2))] : m_world;
         if ((a.body == nullptr && b.body == nullptr) || &a == &b) continue; // &a == &b: merged, holds exactly
+        Settled& settled = m_s.settledJoints[static_cast<std::size_t>(i)];
+        if (settled.holds(a, b)) continue;
         // The frames are taken again only after a projection moved the bodies (one that returns false moved
         // nothing, so the frames it saw still hold).
         const auto& local = m_r.rigidFramesLocal(i);
         Frames frames = framesOf(a, b, local);
+        bool projectedAny = false;
         const auto moved = [&](bool projected) {
             if (projected) frames = framesOf(a, b, local);
-            corrected = corrected || projected;
+            projectedAny = projectedAny || projected;
         };
         if (!std::holds_alternative<std::monostate>(c.limit))
             moved(projectLimit(a, b, c, frames, a.r * m_r.bodyInRigid(c.body1).getBasis(),
                                b.placed ? b.r * m_r.bodyInRigid(c.body2).getBasis() : m_spawnBasis));
         if (freedom.rotation == figure::RotationHold::All) moved(projectOrientation(a, b, frames));
         else if (freedom.rotation == figure::RotationHold::AllButAxis) moved(projectHingeAxis(a, b, frames));
-        corrected = projectAnchor(a, b, frames, freedom.anchor == figure::AnchorHold::Line) || corrected;
+        projectedAny = projectAnchor(a, b, frames, freedom.anchor == figure::AnchorHold::Line) || projectedAny;
+        if (projectedAny) corrected = true;
+        else settled.set(a, b);
     }
-    for (const ContactSides& cs : m_s.contacts) {
+    for (ContactSides& cs : m_s.contacts) {
         Side& a = cs.a ? *cs.a : m_immovableA;
         Side& b = cs.b ? *cs.b : m_immovableB;
-        for (int k = 0; k < cs.manifold->getNumContacts(); ++k)
-            corrected = projectContact(a, b, cs.manifold->getContactPoint(k)) || corrected;
+        for (int k = 0; k < cs.manifold->getNumContacts(); ++k) {
+            Settled& settled = cs.settled[k];
+            if (settled.holds(a, b)) continue;
+            if (projectContact(a, b, cs.manifold->getContactPoint(k))) corrected = true;
+            else settled.set(a, b);
+        }
     }
-    for (const PlaneContact& pc : m_s.planes) corrected = projectPlane(pc, m_s.contacts) || corrected;
-    for (const Stick& st : m_s.sticks) corrected = projectStick(st) || corrected;
+    for (PlaneContact& pc : m_s.planes) {
+        if (pc.settled.holds(*pc.side, m_world)) continue;
+        if (projectPlane(pc, m_s.contacts)) corrected = true;
+        else pc.settled.set(*pc.side, m_world);
+    }
+    for (Stick& st : m_s.sticks) {
+        if (st.settled.holds(*st.side, m_world)) continue;
+        if (projectStick(st)) corrected = true;
+        else st.settled.set(*st.side, m_world);
+    }
     return corrected;
 }
 
@@ -499,6 +532,7 @@ void Pass::writeBack(btScalar dt, bool takeVelocity) {
 void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentManifold* const> manifolds, btScalar dt,
                   bool takeVelocity) {
     Pass pass(r, treeMode, t_scratch);
+    t_scratch.settledJoints.assign(r.figure().constraints.size(), Settled{});
     pass.gather(manifolds);
     const bool haveTree = pass.buildTree();
     for (int sweep = 0; sweep < sweeps; ++sweep)
