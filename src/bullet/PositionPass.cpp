@@ -535,9 +535,11 @@ void positionPass(Ragdoll& r, int sweeps, int treeMode, std::span<btPersistentMa
     t_scratch.settledJoints.assign(r.figure().constraints.size(), Settled{});
     pass.gather(manifolds);
     const bool haveTree = pass.buildTree();
-    for (int sweep = 0; sweep < sweeps; ++sweep)
-        if (!pass.sweep()) break; // nothing left to correct
-    pass.treeSteps(haveTree);
+    // A sweep that corrects nothing has found every joint within the tolerances the tree step closes them to:
+    // the step is left out then.
+    bool open = true;
+    for (int sweep = 0; sweep < sweeps && open; ++sweep) open = pass.sweep();
+    if (open) pass.treeSteps(haveTree);
     pass.writeBack(dt, takeVelocity);
 }
 
