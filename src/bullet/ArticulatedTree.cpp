@@ -261,10 +261,10 @@ bool ArticulatedTree::factorJoint(Joint& j) {
     const Eigen::Matrix<double, F, 6> kp = dInv * s.transpose();
     for (int i = 0; i < F; ++i)
         for (int q = 0; q < 6; ++q) {
-            j.kernels.kp[i][q] = kp(i, q);
-            j.kernels.k[i][q] = k(i, q);
-            j.kernels.is[q][i] = is(q, i);
-            j.kernels.s[q][i] = s(q, i);
+            j.kernels.kp[q][i] = kp(i, q);
+            j.kernels.k[q][i] = k(i, q);
+            j.kernels.is[i][q] = is(q, i);
+            j.kernels.s[i][q] = s(q, i);
         }
     return true;
 }
@@ -297,16 +297,17 @@ template <int F>
     const double* p = m_p[c].data();
     double* y = m_y[c].data();
     double* pt = m_pt[c].data();
-    for (int i = 0; i < F; ++i) {
-        double sum = 0;
-        for (int q = 0; q < 6; ++q) sum += kn.kp[i][q] * p[q];
-        y[i] = sum;
-    }
-    for (int q = 0; q < 6; ++q) {
-        double sum = p[q];
-        for (int i = 0; i < F; ++i) sum -= kn.is[q][i] * y[i];
-        pt[q] = sum;
-    }
+    // Each sum in the order of its terms (y_i = Σ_q (D⁻¹Sᵀ)[i][q] p_q, q ascending), a column at a time: the
+    // compiler takes neighbouring entries together.
+    double yi[F] = {};
+    for (int q = 0; q < 6; ++q)
+        for (int i = 0; i < F; ++i) yi[i] += kn.kp[q][i] * p[q];
+    for (int i = 0; i < F; ++i) y[i] = yi[i];
+    double acc[6];
+    for (int q = 0; q < 6; ++q) acc[q] = p[q];
+    for (int i = 0; i < F; ++i)
+        for (int q = 0; q < 6; ++q) acc[q] -= kn.is[i][q] * y[i];
+    for (int q = 0; q < 6; ++q) pt[q] = acc[q];
     if (j.parent < 0) return;
     Vec6 passed = m_pt[c];
     if (passedOffset) passed -= passedOffset[c];
@@ -327,16 +328,14 @@ template <int F>
     const Joint::Kernels& kn = j.kernels;
     const double* y = m_y[static_cast<std::size_t>(j.child)].data();
     double qd[F];
-    for (int i = 0; i < F; ++i) {
-        double sum = y[i];
-        for (int q = 0; q < 6; ++q) sum -= kn.k[i][q] * w[q];
-        qd[i] = sum;
-    }
-    for (int q = 0; q < 6; ++q) {
-        double sum = w[q];
-        for (int i = 0; i < F; ++i) sum += kn.s[q][i] * qd[i];
-        out[q] = sum;
-    }
+    for (int i = 0; i < F; ++i) qd[i] = y[i];
+    for (int q = 0; q < 6; ++q)
+        for (int i = 0; i < F; ++i) qd[i] -= kn.k[q][i] * w[q];
+    double acc[6];
+    for (int q = 0; q < 6; ++q) acc[q] = w[q];
+    for (int i = 0; i < F; ++i)
+        for (int q = 0; q < 6; ++q) acc[q] += kn.s[i][q] * qd[i];
+    for (int q = 0; q < 6; ++q) out[q] = acc[q];
 }
 
 // A child's motion c that meets the joint's rows asking e on their own (J_c c = e): the locked rows by a turn

@@ -75,11 +75,11 @@ class ArticulatedTree {
         Eigen::Matrix<double, 6, 3> s; // the free motions of the child (first `free` columns)
         // factor(): the inertia the joint passes to the parent (before the shift), and the solves' kernels.
         Mat6 passed;
-        struct Kernels {     // row-major, for the solves' loops
-            double kp[3][6]; // D⁻¹ Sᵀ
-            double k[3][6];  // D⁻¹ (I S)ᵀ
-            double is[6][3]; // I S
-            double s[6][3];  // S
+        struct Kernels {     // laid out for the solves' loops, which sum scaled columns (each entry in its order)
+            double kp[6][3]; // (D⁻¹ Sᵀ)ᵀ
+            double k[6][3];  // (D⁻¹ (I S)ᵀ)ᵀ
+            double is[3][6]; // (I S)ᵀ: column i of I S
+            double s[3][6];  // Sᵀ: free motion i
         } kernels{};
     };
     template <int F>
