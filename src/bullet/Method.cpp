@@ -12,7 +12,7 @@ namespace {
 constexpr std::array<std::string_view, 8> kPresetNames = {"fast",     "balanced", "iterative", "default",
                                                           "accurate", "exact",    "legacy",    "multibody"};
 
-const std::array<MethodKnob, 31> kKnobs = {{
+const std::array<MethodKnob, 32> kKnobs = {{
     {"backend", "Simulation backend: rigid (btRigidBody + constraints) or multibody (btMultiBody)", &Method::backend},
     {"substeps", "Substeps per frame (each of dt / substeps)", &Method::substeps},
     {"impact-substeps",
@@ -74,6 +74,10 @@ const std::array<MethodKnob, 31> kKnobs = {{
     {"friction-through-figure",
      "Contact friction moves the whole ragdoll as its joints let it, not one body (on/off; needs direct-joints)",
      &Method::frictionThroughFigure},
+    {"joint-space",
+     "The direct joint solve eliminates each joint's free motions (the articulated-body recursion) rather than its "
+     "rows; the same solve, cheaper (on/off; needs direct-joints)",
+     &Method::jointSpace},
     {"separated-pairs",
      "Convex pairs apart along the line between their centres skip GJK: the same contacts, cheaper (on/off)",
      &Method::separatedPairs},

@@ -114,6 +114,7 @@ void applyWorldKnobs(btDynamicsWorld& world, const Method& m) {
         solver->setDirectJoints(m.directJoints);
         solver->setFigureBlock(m.directJoints ? m.figureIterations : 0, m.figureSweeps);
         solver->setFrictionThroughGroups(m.frictionThroughFigure);
+        solver->setJointSpace(m.jointSpace);
     }
     // The direct solve takes a batch of islands (Bullet batches small islands up to m_minimumSolverBatchSize
     // constraints) through its own path when a ragdoll is in it and through Bullet's otherwise, and the two round

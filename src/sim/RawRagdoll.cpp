@@ -38,6 +38,7 @@ bullet::Method rawMethod() {
     m.directJoints = false;
     m.figureIterations = 0;
     m.frictionThroughFigure = false;
+    m.jointSpace = false;
     m.separatedPairs = false;
     m.impactSubsteps = 1;
     m.speculativeContacts = false;
@@ -69,6 +70,7 @@ std::string rawMethodError(const bullet::Method& m) {
     if (m.exemptOverlapping) knobs += " exempt-overlapping";
     if (m.constantVelocityUniversal) knobs += " constant-velocity-universal";
     if (m.frictionThroughFigure) knobs += " friction-through-figure";
+    if (m.jointSpace) knobs += " joint-space";
     if (m.separatedPairs) knobs += " separated-pairs";
     if (m.impactSubsteps > 1) knobs += " impact-substeps";
     if (knobs.empty()) return {};

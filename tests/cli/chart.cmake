@@ -29,7 +29,7 @@ set(expected_columns
     method.warm-starting method.warm-starting-factor method.friction-directions method.position-iterations method.position-tree method.position-velocity method.multipoint-contacts
     method.speculative-contacts method.self-contact-cap method.speculative-limits method.ccd method.joint-warm-starting
     method.limit-warm-starting method.direct-joints method.figure-iterations method.figure-sweeps method.merge-fixed method.exempt-overlapping
-    method.constant-velocity-universal method.friction-through-figure method.separated-pairs)
+    method.constant-velocity-universal method.friction-through-figure method.joint-space method.separated-pairs)
 string(REPLACE "," ";" columns "${header}")
 if(NOT columns STREQUAL expected_columns)
   message(FATAL_ERROR "runs.csv header:\n  ${header}\nexpected:\n  ${expected_columns}")
