@@ -167,8 +167,6 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
     m_ia.resize(static_cast<std::size_t>(n));
     m_p.resize(static_cast<std::size_t>(n));
     m_pt.resize(static_cast<std::size_t>(n));
-    m_c.resize(static_cast<std::size_t>(n));
-    m_cp.resize(static_cast<std::size_t>(n));
     m_y.resize(static_cast<std::size_t>(n));
     return true;
 }
@@ -378,9 +376,8 @@ void ArticulatedTree::up(const Joint& j, const std::vector<Vec6>* passedOffsets)
     else upJoint<3>(j, po);
 }
 
-// Root first: each body's motion from its parent's (with the joints' `offsets` when there are targets), and the
-// joints' impulses when `lambda` is not empty.
-void ArticulatedTree::down(std::span<double> dv, const std::vector<Vec6>* offsets, std::span<double> lambda) const {
+// Root first: each body's motion from its parent's (with the joints' `offsets` when there are targets).
+void ArticulatedTree::down(std::span<double> dv, const std::vector<Vec6>* offsets) const {
     if (m_root >= 0)
         Eigen::Map<Vec6>(dv.data() + 6 * static_cast<std::size_t>(m_root)) =
             m_rootInverse * m_p[static_cast<std::size_t>(m_root)];
@@ -404,45 +401,30 @@ void ArticulatedTree::down(std::span<double> dv, const std::vector<Vec6>* offset
         if (j.free == 1) downJoint<1>(j, w, out);
         else if (j.free == 2) downJoint<2>(j, w, out);
         else downJoint<3>(j, w, out);
-        if (!lambda.empty()) impulses(j, j.passed * Eigen::Map<const Vec6>(w) - m_pt[c], lambda);
     }
-}
-
-void ArticulatedTree::offsetsOf(std::span<const double> e, std::vector<Vec6>& offsets,
-                                std::vector<Vec6>& passedOffsets) const {
-    offsets.resize(m_mass.size());
-    passedOffsets.resize(m_mass.size());
-    for (const Joint& j : m_joints) {
-        const auto c = static_cast<std::size_t>(j.child);
-        offsets[c] = particular(j, e);
-        passedOffsets[c].noalias() = j.passed * offsets[c];
-    }
-}
-
-void ArticulatedTree::solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
-                            std::span<double> lambda) const {
-    const std::size_t n = m_mass.size();
-    for (std::size_t i = 0; i < n; ++i) m_p[i] = Eigen::Map<const Vec6>(f.data() + 6 * i);
-    const bool targets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
-    if (targets) offsetsOf(e, m_c, m_cp);
-    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, targets ? &m_cp : nullptr);
-    down(dv, targets ? &m_c : nullptr, lambda);
 }
 
 void ArticulatedTree::setTargets(std::span<const double> e) {
     m_hasTargets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
-    if (m_hasTargets) offsetsOf(e, m_target, m_targetPassed);
+    if (!m_hasTargets) return;
+    m_target.resize(m_mass.size());
+    m_targetPassed.resize(m_mass.size());
+    for (const Joint& j : m_joints) {
+        const auto c = static_cast<std::size_t>(j.child);
+        m_target[c] = particular(j, e);
+        m_targetPassed[c].noalias() = j.passed * m_target[c];
+    }
 }
 
 void ArticulatedTree::project(std::span<double> dv) const {
-    // The bodies' momentum M dv as the impulses of solve().
+    // The bodies' momentum M dv, the impulses the projection starts from.
     for (std::size_t i = 0; i < m_mass.size(); ++i) {
         const Eigen::Map<const Vec6> v(dv.data() + 6 * i);
         m_p[i].head<3>() = m_mass[i] * v.head<3>();
         m_p[i].tail<3>().noalias() = m_inertia[i] * v.tail<3>();
     }
     for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, m_hasTargets ? &m_targetPassed : nullptr);
-    down(dv, m_hasTargets ? &m_target : nullptr, {});
+    down(dv, m_hasTargets ? &m_target : nullptr);
 }
 
 void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {
@@ -461,7 +443,7 @@ void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb,
         if (m_onPath[static_cast<std::size_t>(it->child)]) up(*it, nullptr);
         else m_y[static_cast<std::size_t>(it->child)].setZero();
     }
-    down(dv, nullptr, {});
+    down(dv, nullptr);
 }
 
 void ArticulatedTree::jointImpulses(std::span<const double> f, std::span<const double> dv,

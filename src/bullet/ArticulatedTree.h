@@ -37,24 +37,19 @@ class ArticulatedTree {
     bool build(std::span<const Body> bodies, std::span<const Row> rows);
     /// The articulated inertias of the bodies' current masses and rows. False when one is not positive definite.
     bool factor();
-    /// Solves M Δv = f + Jᵀλ, J Δv = e: `f` and `dv` hold 6 entries per body, `e` and `lambda` one per row, in
-    /// build()'s order (`lambda` empty: the impulses are not wanted).
-    void solve(std::span<const double> f, std::span<const double> e, std::span<double> dv,
-               std::span<double> lambda) const;
-
     /// Fixes the rows' targets `e` (one per row, in build()'s order) for project(): each joint's particular motion
     /// and the impulse it passes to its parent are taken once, not at every projection.
     void setTargets(std::span<const double> e);
     /// The velocity changes `dv` (6 per body) replaced by the nearest, in the mass metric, that meet setTargets'
-    /// targets: solve() with f = M dv, so M dv′ = M dv + Jᵀλ and J dv′ = e. No row's velocity is read: an iteration
-    /// that restores the joints costs one pass up and one down.
+    /// targets: M dv′ = M dv + Jᵀλ and J dv′ = e. No row's velocity is read: an iteration that restores the joints
+    /// costs one pass up and one down. (For impulses f, project M⁻¹f: M dv′ = f + Jᵀλ.)
     void project(std::span<double> dv) const;
 
-    /// solve() for impulses `fa` on body a and `fb` on body b (−1: none) and no joint targets, without the joints'
+    /// M Δv = f + Jᵀλ, J Δv = 0 for impulses `fa` on body a and `fb` on body b (−1: none), without the joints'
     /// impulses: a row's column through the figure. Only the paths from a and b to the root carry the impulses up.
     void solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const;
-    /// The joint rows' impulses from the bodies' velocity changes `dv` and every other impulse `f` they took (6 per
-    /// body each), by each body's momentum: the impulses solve() would have returned for the same changes.
+    /// The joint rows' impulses λ from the bodies' velocity changes `dv` and every other impulse `f` they took (6 per
+    /// body each), by each body's momentum: M dv = f + Jᵀλ.
     void jointImpulses(std::span<const double> f, std::span<const double> dv, std::span<double> lambda) const;
 
     int bodies() const { return static_cast<int>(m_mass.size()); }
@@ -91,8 +86,7 @@ class ArticulatedTree {
     // `offsets`: per body, the particular motion of its joint and (`passedOffsets`) the impulse that passes on;
     // null: no targets.
     void up(const Joint& j, const std::vector<Vec6>* passedOffsets) const;
-    void down(std::span<double> dv, const std::vector<Vec6>* offsets, std::span<double> lambda) const;
-    void offsetsOf(std::span<const double> e, std::vector<Vec6>& offsets, std::vector<Vec6>& passedOffsets) const;
+    void down(std::span<double> dv, const std::vector<Vec6>* offsets) const;
     bool orient(std::span<const Row> rows);
     bool shapeJoint(Joint& j, std::span<const Row> rows);
     Vec6 particular(const Joint& j, std::span<const double> e) const;
@@ -108,8 +102,7 @@ class ArticulatedTree {
     std::vector<Mat6> m_ia;                     // factor(): articulated inertias
     Mat6 m_rootInverse;                         // factor(): the free root's articulated inertia, inverted
     mutable std::vector<Vec6> m_p, m_pt;        // the solves' scratch: bias impulses, their part through the joint
-    mutable std::vector<Vec6> m_c, m_cp;        // solve()'s offsets (particular motions) and what they pass on
-    std::vector<Vec6> m_target, m_targetPassed; // setTargets()'s
+    std::vector<Vec6> m_target, m_targetPassed; // setTargets(): particular motions, and what they pass on
     bool m_hasTargets = false;
     mutable std::vector<Eigen::Vector3d> m_y; // D⁻¹ Sᵀ p per joint
     mutable std::vector<char> m_onPath;       // solveImpulse()'s bodies on a path to the root
