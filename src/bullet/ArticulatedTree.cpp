@@ -9,6 +9,12 @@
 // (I V = p + the impulse of its own joint) pass to the parent as Tᵀ Ĩ T and Tᵀ (p̃ − Ĩ c), Ĩ = I − I S D⁻¹ Sᵀ I,
 // p̃ = p − I S D⁻¹ Sᵀ p, D = Sᵀ I S; root first, q̇ = D⁻¹ Sᵀ (p − I (T V_p + c)), and the joint's impulse at the
 // child is J_cᵀ λ = Ĩ (T V_p + c) − p̃ (Featherstone, "Rigid Body Dynamics Algorithms", 2008, ch. 7, in impulses).
+//
+// A soft row (0, u) / (0, −u) with compliance γ asks u·(ω_c − ω_p) + γλ = e: its impulse λ = (e − u·(c + S q̇))/γ
+// is an implicit spring and damper on the free motions. Eliminated with them, it adds Sᵀ u uᵀ S / γ to D and
+// Sᵀ u (e − u·c)/γ to the free part of the bias (D⁻¹ of it added to y); every other formula keeps its form. In the
+// iterations the bodies' momentum already holds the impulse λ the row took so far, so a projection asks e − γλ of
+// it and adds what it finds: λ′ = (e − u·(ω_c − ω_p))/γ after the projection.
 #include "ArticulatedTree.h"
 
 #include <algorithm>
@@ -76,6 +82,7 @@ Mat6 shiftInertia(const Vec3& d, const Mat6& p) {
 bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> rows) {
     m_hasTargets = false;
     m_target.clear();
+    m_softRows = 0;
     m_mass.clear();
     m_inertia.clear();
     for (const Body& b : bodies) {
@@ -87,8 +94,10 @@ bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> r
     bool same = m_valid && m_key.size() == 1 + 2 * rows.size() && m_key[0] == n;
     for (std::size_t k = 0; k < rows.size(); ++k) {
         const Row& r = rows[k];
-        if (r.a < -1 || r.b < -1 || r.a >= n || r.b >= n || r.a == r.b || !r.ja.allFinite() || !r.jb.allFinite())
+        if (r.a < -1 || r.b < -1 || r.a >= n || r.b >= n || r.a == r.b || !r.ja.allFinite() || !r.jb.allFinite() ||
+            !(r.cfm >= 0) || !std::isfinite(r.cfm))
             return m_valid = false;
+        if (r.cfm > 0) ++m_softRows;
         same = same && m_key[1 + 2 * k] == r.a && m_key[2 + 2 * k] == r.b;
     }
     if (!same) {
@@ -160,7 +169,7 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
         m_jointOf[static_cast<std::size_t>(j.child)] = static_cast<int>(k);
         const std::vector<int>& mine =
             pairs[static_cast<std::size_t>(parentPair[static_cast<std::size_t>(j.child)])].rows;
-        if (mine.size() > 5) return false;
+        if (mine.size() > 8) return false;
         j.pairCount = static_cast<int>(mine.size());
         std::copy(mine.begin(), mine.end(), j.pairRows);
     }
@@ -168,15 +177,17 @@ bool ArticulatedTree::orient(std::span<const Row> rows) {
     m_p.resize(static_cast<std::size_t>(n));
     m_pt.resize(static_cast<std::size_t>(n));
     m_y.resize(static_cast<std::size_t>(n));
+    m_softY.resize(static_cast<std::size_t>(n));
     return true;
 }
 
-// A joint's geometry from its rows: the anchor rows' directions and both lever arms, the locked axes, the free
-// motions of the child.
+// A joint's geometry from its rows: the anchor rows' directions and both lever arms, the locked axes, the soft rows'
+// axes, the free motions of the child.
 bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows) {
     Vec3 lin[3], ang[3], linP[3], angP[3];
     int anchors = 0;
     j.locked = 0;
+    j.softCount = 0;
     for (int q = 0; q < j.pairCount; ++q) {
         const int k = j.pairRows[q];
         const Row& r = rows[static_cast<std::size_t>(k)];
@@ -185,7 +196,7 @@ bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows) {
         const Vec3 lc = jc.head<3>(), ac = jc.tail<3>(), lp = jp.head<3>(), ap = jp.tail<3>();
         const bool parent = j.parent >= 0;
         if (lc.squaredNorm() > 0) {
-            if (anchors == 3 || (parent && (lp + lc).norm() > 1e-6 * lc.norm())) return false;
+            if (anchors == 3 || r.cfm > 0 || (parent && (lp + lc).norm() > 1e-6 * lc.norm())) return false;
             lin[anchors] = lc;
             ang[anchors] = ac;
             linP[anchors] = lp;
@@ -193,9 +204,16 @@ bool ArticulatedTree::shapeJoint(Joint& j, std::span<const Row> rows) {
             j.rows[anchors++] = k;
             continue;
         }
-        if (j.locked == 2 || !(ac.squaredNorm() > 0) ||
-            (parent && (lp.squaredNorm() > 0 || (ap + ac).norm() > 1e-6 * ac.norm())))
+        if (!(ac.squaredNorm() > 0) || (parent && (lp.squaredNorm() > 0 || (ap + ac).norm() > 1e-6 * ac.norm())))
             return false;
+        if (r.cfm > 0) {
+            if (j.softCount == 3) return false;
+            j.softAxis.col(j.softCount) = ac;
+            j.softCfm[j.softCount] = r.cfm;
+            j.soft[j.softCount++] = k;
+            continue;
+        }
+        if (j.locked == 2) return false;
         j.u.col(j.locked) = ac;
         j.rows[3 + j.locked++] = k;
     }
@@ -246,7 +264,11 @@ bool ArticulatedTree::factorJoint(Joint& j) {
     const Eigen::Map<const MatS> s(j.s.data());
     const Mat6& ia = m_ia[static_cast<std::size_t>(j.child)];
     const MatS is = ia * s;
-    const Eigen::Matrix<double, F, F> d = s.transpose() * is;
+    Eigen::Matrix<double, F, F> d = s.transpose() * is;
+    for (int k = 0; k < j.softCount; ++k) { // a soft row's spring on the free motions: Sᵀ u uᵀ S / γ
+        const Eigen::Matrix<double, F, 1> w = s.template bottomRows<3>().transpose() * j.softAxis.col(k);
+        d.noalias() += w * w.transpose() / j.softCfm[k];
+    }
     Eigen::Matrix<double, F, F> dInv;
     bool invertible = d(0, 0) > 0;
     if constexpr (F == 1) dInv(0, 0) = 1.0 / d(0, 0);
@@ -289,7 +311,8 @@ bool ArticulatedTree::factor() {
 
 // Leaves to root: the joint's free part of its child's bias impulse (y = D⁻¹ Sᵀ p), the rest passed to the parent.
 template <int F>
-[[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, const Vec6* passedOffset) const {
+[[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, const Vec6* passedOffset,
+                                                            const Eigen::Vector3d* yOffset) const {
     const auto c = static_cast<std::size_t>(j.child);
     const Joint::Kernels& kn = j.kernels;
     const double* p = m_p[c].data();
@@ -300,6 +323,8 @@ template <int F>
     double yi[F] = {};
     for (int q = 0; q < 6; ++q)
         for (int i = 0; i < F; ++i) yi[i] += kn.kp[q][i] * p[q];
+    if (yOffset && j.softCount > 0)
+        for (int i = 0; i < F; ++i) yi[i] += yOffset[c][i];
     for (int i = 0; i < F; ++i) y[i] = yi[i];
     double acc[6];
     for (int q = 0; q < 6; ++q) acc[q] = p[q];
@@ -369,11 +394,13 @@ void ArticulatedTree::impulses(const Joint& j, const Vec6& g, std::span<double> 
     lambda[static_cast<std::size_t>(j.rows[4])] = m[1];
 }
 
-void ArticulatedTree::up(const Joint& j, const std::vector<Vec6>* passedOffsets) const {
+void ArticulatedTree::up(const Joint& j, const std::vector<Vec6>* passedOffsets,
+                         const std::vector<Eigen::Vector3d>* yOffsets) const {
     const Vec6* po = passedOffsets ? passedOffsets->data() : nullptr;
-    if (j.free == 1) upJoint<1>(j, po);
-    else if (j.free == 2) upJoint<2>(j, po);
-    else upJoint<3>(j, po);
+    const Vec3* yo = yOffsets ? yOffsets->data() : nullptr;
+    if (j.free == 1) upJoint<1>(j, po, yo);
+    else if (j.free == 2) upJoint<2>(j, po, yo);
+    else upJoint<3>(j, po, yo);
 }
 
 // Root first: each body's motion from its parent's (with the joints' `offsets` when there are targets).
@@ -406,25 +433,64 @@ void ArticulatedTree::down(std::span<double> dv, const std::vector<Vec6>* offset
 
 void ArticulatedTree::setTargets(std::span<const double> e) {
     m_hasTargets = std::any_of(e.begin(), e.end(), [](double v) { return v != 0; });
-    if (!m_hasTargets) return;
-    m_target.resize(m_mass.size());
-    m_targetPassed.resize(m_mass.size());
-    for (const Joint& j : m_joints) {
+    if (m_hasTargets) {
+        m_target.resize(m_mass.size());
+        m_targetPassed.resize(m_mass.size());
+    }
+    for (Joint& j : m_joints) {
         const auto c = static_cast<std::size_t>(j.child);
-        m_target[c] = particular(j, e);
-        m_targetPassed[c].noalias() = j.passed * m_target[c];
+        if (m_hasTargets) {
+            m_target[c] = particular(j, e);
+            m_targetPassed[c].noalias() = j.passed * m_target[c];
+        }
+        j.softBias.setZero();
+        for (int k = 0; k < j.softCount; ++k) {
+            j.softTarget[k] = e[static_cast<std::size_t>(j.soft[k])];
+            if (!m_hasTargets) continue;
+            const Vec3 u = j.softAxis.col(k);
+            j.softBias += u * (u.dot(m_target[c].tail<3>()) / j.softCfm[k]);
+        }
     }
 }
 
-void ArticulatedTree::project(std::span<double> dv) const {
+void ArticulatedTree::softOffsets(std::span<const double> lambda) const {
+    for (const Joint& j : m_joints) {
+        if (j.softCount == 0) continue;
+        Vec3 b = -j.softBias;
+        for (int k = 0; k < j.softCount; ++k)
+            b += j.softAxis.col(k) *
+                 ((j.softTarget[k] - j.softCfm[k] * lambda[static_cast<std::size_t>(j.soft[k])]) / j.softCfm[k]);
+        Vec3& y = m_softY[static_cast<std::size_t>(j.child)];
+        y.setZero();
+        for (int i = 0; i < j.free; ++i)
+            for (int q = 0; q < 3; ++q) y[i] += j.kernels.kp[3 + q][i] * b[q];
+    }
+}
+
+void ArticulatedTree::softImpulses(std::span<const double> dv, std::span<double> lambda) const {
+    for (const Joint& j : m_joints) {
+        if (j.softCount == 0) continue;
+        Vec3 turn = Eigen::Map<const Vec3>(dv.data() + 6 * static_cast<std::size_t>(j.child) + 3);
+        if (j.parent >= 0) turn -= Eigen::Map<const Vec3>(dv.data() + 6 * static_cast<std::size_t>(j.parent) + 3);
+        for (int k = 0; k < j.softCount; ++k)
+            lambda[static_cast<std::size_t>(j.soft[k])] =
+                (j.softTarget[k] - j.softAxis.col(k).dot(turn)) / j.softCfm[k];
+    }
+}
+
+void ArticulatedTree::project(std::span<double> dv, std::span<double> lambda) const {
     // The bodies' momentum M dv, the impulses the projection starts from.
     for (std::size_t i = 0; i < m_mass.size(); ++i) {
         const Eigen::Map<const Vec6> v(dv.data() + 6 * i);
         m_p[i].head<3>() = m_mass[i] * v.head<3>();
         m_p[i].tail<3>().noalias() = m_inertia[i] * v.tail<3>();
     }
-    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, m_hasTargets ? &m_targetPassed : nullptr);
+    const bool soft = m_softRows > 0;
+    if (soft) softOffsets(lambda);
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it)
+        up(*it, m_hasTargets ? &m_targetPassed : nullptr, soft ? &m_softY : nullptr);
     down(dv, m_hasTargets ? &m_target : nullptr);
+    if (soft) softImpulses(dv, lambda);
 }
 
 void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {
@@ -458,7 +524,14 @@ void ArticulatedTree::jointImpulses(std::span<const double> f, std::span<const d
         g.head<3>() = m_mass[c] * v.head<3>();
         g.tail<3>() = m_inertia[c] * v.tail<3>();
         g += m_p[c] - fc;
-        impulses(j, g, lambda);
+        if (j.softCount == 0) {
+            impulses(j, g, lambda);
+        } else { // the soft rows' impulses are the caller's; the rest is the joint's
+            Vec6 hard = g;
+            for (int k = 0; k < j.softCount; ++k)
+                hard.tail<3>() -= j.softAxis.col(k) * lambda[static_cast<std::size_t>(j.soft[k])];
+            impulses(j, hard, lambda);
+        }
         if (j.parent >= 0) m_p[static_cast<std::size_t>(j.parent)] += shiftBack(j.d, g);
     }
 }

@@ -1,6 +1,6 @@
 // The direct joint solve's joint-space path (DirectSolve.h, ArticulatedTree.h): a group whose joints are point
-// joints with locked axes (ball, universal, hinge) and whose rows are all stiff is solved by eliminating each
-// joint's free motions rather than its rows. The same system, solved exactly either way; this way the factor
+// joints with locked axes (ball, universal, hinge), soft rows only as motors about them, is solved by eliminating
+// each joint's free motions rather than its rows. The same system, solved exactly either way; this way the factor
 // works on 1 to 3 free motions per joint where the tree of bodies and joints works on 6 per body and 3 to 5 per
 // joint, and a row's response walks only its own path to the root upwards.
 #include <Eigen/Dense>
@@ -10,7 +10,7 @@
 namespace afb::bullet {
 
 bool RagdollSolver::Direct::factorArticulated(Group& group, const btAlignedObjectArray<btSolverBody>& bodyPool) {
-    if (group.soft) return false;
+    if (group.heldTwice) return false; // rows softened against each other, not motors
     std::vector<ArticulatedTree::Body>& bodies = group.articulatedBodies;
     bodies.clear();
     for (const int id : group.bodies) {
@@ -24,10 +24,13 @@ bool RagdollSolver::Direct::factorArticulated(Group& group, const btAlignedObjec
     }
     std::vector<ArticulatedTree::Row>& rows = group.articulatedRows;
     rows.clear();
-    for (const JointRow& jr : group.rows) {
+    for (std::size_t i = 0; i < group.rows.size(); ++i) {
+        const JointRow& jr = group.rows[i];
         ArticulatedTree::Row& row = rows.emplace_back();
         row.a = jr.bodyA;
         row.b = jr.bodyB;
+        row.cfm = group.cfm(static_cast<Eigen::Index>(i));
+        if (row.cfm > 0) group.softRows.push_back(static_cast<int>(i));
         for (int q = 0; q < 3; ++q) {
             row.ja[q] = double(jr.a.lin[q]);
             row.ja[3 + q] = double(jr.a.ang[q]);
@@ -55,7 +58,22 @@ void RagdollSolver::Direct::articulatedColumn(FreeRow& fr, int s, bool withA, bo
     const std::size_t nb = group.bodies.size();
     response.resize(6 * nb);
     group.articulated.solveImpulse(xa, impulse(sa), xb, impulse(sb), response);
-    fr.reaction[s] = -1; // the joints' impulses come from the bodies' momentum (articulatedImpulses)
+    // The joints' impulses come from the bodies' momentum (articulatedImpulses), but a soft row's is part of what a
+    // projection asks: its reaction, −(J u)/cfm per unit impulse, is kept (apply()).
+    fr.reaction[s] = -1;
+    if (!group.softRows.empty()) {
+        fr.reaction[s] = static_cast<int>(reactions.size());
+        for (const int i : group.softRows) {
+            const JointRow& jr = group.rows[static_cast<std::size_t>(i)];
+            double v = 0;
+            for (const auto& [x, side] : {std::pair{jr.bodyA, &jr.a}, std::pair{jr.bodyB, &jr.b}}) {
+                if (x < 0) continue;
+                const double* u = response.data() + 6 * static_cast<std::size_t>(x);
+                for (int q = 0; q < 3; ++q) v += double(side->lin[q]) * u[q] + double(side->ang[q]) * u[3 + q];
+            }
+            reactions.push_back(v / group.cfm(i));
+        }
+    }
     keepResponse(fr, s, xa, sa, xb, sb, nb);
 }
 
@@ -107,7 +125,7 @@ void RagdollSolver::Direct::articulatedImpulses(
                 articulatedDv[6 * x + 3 + static_cast<std::size_t>(q)] = double(b.m_deltaAngularVelocity[q]);
             }
         }
-        articulatedLambda.resize(group.rows.size());
+        articulatedLambda.assign(group.lambda.data(), group.lambda.data() + group.lambda.size()); // soft rows' kept
         group.articulated.jointImpulses(std::span<const double>(articulatedF.data() + firstOf[g], 6 * nb),
                                         articulatedDv, articulatedLambda);
         for (std::size_t i = 0; i < group.rows.size(); ++i)

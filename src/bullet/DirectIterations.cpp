@@ -29,8 +29,14 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
                     dv[3 + q] = double(b.m_deltaAngularVelocity[q]);
                 }
             }
-            group.articulated.project(solveX);
-            if (!std::all_of(solveX.begin(), solveX.end(), [](double v) { return std::isfinite(v); })) continue;
+            // Soft rows (motors) read and update their impulses; a projection that fails gives them theirs back.
+            softKept.clear();
+            for (const int i : group.softRows) softKept.push_back(group.lambda(i));
+            group.articulated.project(solveX, std::span<double>(group.lambda.data(), group.rows.size()));
+            if (!std::all_of(solveX.begin(), solveX.end(), [](double v) { return std::isfinite(v); })) {
+                for (std::size_t m = 0; m < softKept.size(); ++m) group.lambda(group.softRows[m]) = softKept[m];
+                continue;
+            }
             for (std::size_t xb = 0; xb < nb; ++xb) {
                 btSolverBody& b = bodyPool[group.bodies[xb]];
                 const double* dv = solveX.data() + 6 * xb;
@@ -114,9 +120,12 @@ void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody
             addScaled(b.m_deltaLinearVelocity, u[2 * x], impulse);
             addScaled(b.m_deltaAngularVelocity, u[2 * x + 1], impulse);
         }
-        if (group.soft) {
+        if (group.soft && fr.reaction[s] >= 0) {
             const double* y = reactions.data() + fr.reaction[s];
-            for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
+            if (group.useArticulated)
+                for (std::size_t m = 0; m < group.softRows.size(); ++m) group.lambda(group.softRows[m]) -= y[m] * dl;
+            else
+                for (Eigen::Index i = 0; i < group.lambda.size(); ++i) group.lambda(i) -= y[i] * dl;
         }
     }
 }

@@ -296,6 +296,7 @@ void RagdollSolver::Direct::softenRedundantHolds(Group& group, const btAlignedOb
         const double own = row.bodyA >= 0 ? dot(row.a, row.a) : dot(row.b, row.b);
         group.cfm(static_cast<Eigen::Index>(i)) += kRedundantHoldCompliance * own;
         group.soft = true;
+        group.heldTwice = true;
     }
 }
 

@@ -100,10 +100,13 @@ struct RagdollSolver::Direct {
         BlockTree tree;
         bool useTree = false;
         // The joint-space solve of the same system (ArticulatedTree), used instead of the tree's factor when the
-        // joints are point joints with locked axes and no row is soft: the joints' impulses then come from the
-        // bodies' momentum once the iterations end (articulatedImpulses) rather than from each row's reaction.
+        // joints are point joints with locked axes (and soft rows only as motors about them): the joints' impulses
+        // then come from the bodies' momentum once the iterations end (articulatedImpulses) rather than from each
+        // row's reaction, but for the soft rows', which are kept up to date.
         ArticulatedTree articulated;
         bool useArticulated = false;
+        std::vector<int> softRows; // a joint-space group's soft rows (motors): their reactions are kept (`soft`)
+        bool heldTwice = false;    // softenRedundantHolds softened rows (the joint-space solve then declines)
         std::vector<ArticulatedTree::Body> articulatedBodies;
         std::vector<ArticulatedTree::Row> articulatedRows;
         std::vector<int> rowAt;
@@ -127,6 +130,8 @@ struct RagdollSolver::Direct {
             for (auto& at : rowsAt) at.clear();
             useTree = false;
             useArticulated = false;
+            softRows.clear();
+            heldTwice = false;
             soft = false;
         }
     };
@@ -281,6 +286,7 @@ struct RagdollSolver::Direct {
     std::vector<int> unionParent, groupOfRoot;
     std::vector<double> solveX;
     std::vector<double> e;            // one group's joint errors
+    std::vector<double> softKept;     // one group's soft rows' impulses before a projection
     std::vector<double> articulatedF; // articulatedImpulses()' impulses and velocity changes, 6 per group body
     std::vector<double> articulatedDv, articulatedLambda;
     std::vector<int> articulatedFirst; // per group: its bodies' first entry in articulatedF

@@ -1,8 +1,8 @@
 // ArticulatedTree (src/bullet/ArticulatedTree.h), the joint-space form of the exact joint solve, against a dense
 // solve of the same equations by Eigen: random trees (fixed seed) of bodies with random masses, inertias and
 // places, held by ball, universal-like (one axis locked) and hinge-like (two locked) joints whose rows are built
-// as a solver builds them (anchor rows along arbitrary directions, either body as the row's side A), free or hung
-// from the world; and the layouts it must refuse.
+// as a solver builds them (anchor rows along arbitrary directions, either body as the row's side A), some with soft
+// angular rows (motors) on top, free or hung from the world; and the layouts it must refuse.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -31,8 +31,9 @@ Vec3 randomVec(std::mt19937& rng, double scale) {
     return {u(rng), u(rng), u(rng)};
 }
 
-// The rows of a joint between `parent` (−1: the world) and `child` at `anchor`, locking `locked` rotation axes.
-void addJoint(Figure& fig, int parent, int child, const Vec3& anchor, int locked, std::mt19937& rng) {
+// The rows of a joint between `parent` (−1: the world) and `child` at `anchor`, locking `locked` rotation axes, and
+// `soft` soft angular rows along arbitrary axes (a motor).
+void addJoint(Figure& fig, int parent, int child, const Vec3& anchor, int locked, std::mt19937& rng, int soft = 0) {
     const Vec3 rc = anchor - fig.centre[static_cast<std::size_t>(child)];
     const Vec3 rp = parent >= 0 ? Vec3(anchor - fig.centre[static_cast<std::size_t>(parent)]) : Vec3::Zero();
     std::bernoulli_distribution coin(0.5);
@@ -57,9 +58,18 @@ void addJoint(Figure& fig, int parent, int child, const Vec3& anchor, int locked
         jp << Vec3::Zero(), -u;
         add(jc, jp);
     }
+    for (int i = 0; i < soft; ++i) {
+        const Vec3 u = randomVec(rng, 1.0);
+        Vec6 jc, jp;
+        jc << Vec3::Zero(), u;
+        jp << Vec3::Zero(), -u;
+        add(jc, jp);
+        fig.rows.back().cfm = std::uniform_real_distribution<double>(0.01, 2.0)(rng);
+    }
 }
 
-Figure randomFigure(int n, bool hung, std::mt19937& rng) {
+// `motors`: each joint gets 0 to 3 soft rows.
+Figure randomFigure(int n, bool hung, std::mt19937& rng, bool motors = false) {
     Figure fig;
     std::uniform_real_distribution<double> mass(0.5, 70.0), axis(0.01, 2.0);
     for (int i = 0; i < n; ++i) {
@@ -71,16 +81,17 @@ Figure randomFigure(int n, bool hung, std::mt19937& rng) {
         fig.bodies.push_back({mass(rng), rot * diag.asDiagonal() * rot.transpose()});
         fig.centre.push_back(randomVec(rng, 1.0));
     }
-    std::uniform_int_distribution<int> locks(0, 2);
-    if (hung) addJoint(fig, -1, 0, randomVec(rng, 1.0), locks(rng), rng);
+    std::uniform_int_distribution<int> locks(0, 2), softRows(0, 3);
+    auto soft = [&] { return motors ? softRows(rng) : 0; };
+    if (hung) addJoint(fig, -1, 0, randomVec(rng, 1.0), locks(rng), rng, soft());
     for (int i = 1; i < n; ++i) {
         const int parent = std::uniform_int_distribution<int>(0, i - 1)(rng);
-        addJoint(fig, parent, i, randomVec(rng, 1.0), locks(rng), rng);
+        addJoint(fig, parent, i, randomVec(rng, 1.0), locks(rng), rng, soft());
     }
     return fig;
 }
 
-// [[M, −Jᵀ], [J, 0]] [Δv; λ] = [f; e], densely.
+// [[M, −Jᵀ], [J, C]] [Δv; λ] = [f; e], densely (C: the rows' compliances).
 Eigen::VectorXd denseSolve(const Figure& fig, const Eigen::VectorXd& f, const Eigen::VectorXd& e) {
     const int n = static_cast<int>(fig.bodies.size()), k = static_cast<int>(fig.rows.size());
     Eigen::MatrixXd h = Eigen::MatrixXd::Zero(6 * n + k, 6 * n + k);
@@ -95,6 +106,7 @@ Eigen::VectorXd denseSolve(const Figure& fig, const Eigen::VectorXd& f, const Ei
             h.block<6, 1>(6 * body, 6 * n + r) = -j;
             h.block<1, 6>(6 * n + r, 6 * body) = j.transpose();
         }
+        h(6 * n + r, 6 * n + r) = row.cfm;
     }
     Eigen::VectorXd rhs(6 * n + k);
     rhs << f, e;
@@ -254,4 +266,86 @@ TEST_CASE("articulated tree: the column of a row on one or two bodies is their i
         for (int i = 0; i < 6 * n; ++i)
             CHECK(column[static_cast<std::size_t>(i)] == Approx(dv[static_cast<std::size_t>(i)]).margin(1e-12));
     }
+}
+
+TEST_CASE("articulated tree: soft rows (motors) give the dense solve of J dv + C lambda = e, from any impulse they "
+          "took before",
+          "[bullet][direct]") {
+    // A soft row's impulse so far is already in the bodies' momentum: starting from M⁻¹(f + J_sᵀ λ0) with λ0 as the
+    // soft rows' impulses, one projection reaches the dense solution of f alone, its soft impulses included, and a
+    // second changes nothing. A row's column (solveImpulse) is the projection of its impulses with no targets.
+    std::mt19937 rng(1129);
+    for (int trial = 0; trial < 60; ++trial) {
+        const int n = 1 + trial % 12;
+        const Figure fig = randomFigure(n, trial % 3 == 0, rng, true);
+        ArticulatedTree tree = factored(fig);
+        const int k = static_cast<int>(fig.rows.size());
+        INFO("trial " << trial << ", " << n << " bodies, " << k << " rows");
+        Eigen::VectorXd e(k);
+        for (int i = 0; i < k; ++i) e[i] = std::uniform_real_distribution<double>(-1, 1)(rng);
+        tree.setTargets(std::span<const double>(e.data(), static_cast<std::size_t>(k)));
+        Eigen::VectorXd f(6 * n);
+        for (int i = 0; i < 6 * n; ++i) f[i] = std::uniform_real_distribution<double>(-5, 5)(rng);
+        std::vector<double> lambda(static_cast<std::size_t>(k), 0.0);
+        Eigen::VectorXd taken = f;
+        for (int r = 0; r < k; ++r) {
+            const ArticulatedTree::Row& row = fig.rows[static_cast<std::size_t>(r)];
+            if (!(row.cfm > 0)) continue;
+            lambda[static_cast<std::size_t>(r)] = std::uniform_real_distribution<double>(-3, 3)(rng);
+            for (const auto& [body, j] : {std::pair{row.a, row.ja}, std::pair{row.b, row.jb}})
+                if (body >= 0) taken.segment<6>(6 * body) += j * lambda[static_cast<std::size_t>(r)];
+        }
+        std::vector<double> dv = freeMotion(fig, taken);
+        tree.project(dv, lambda);
+        const Eigen::VectorXd ref = denseSolve(fig, f, e);
+        const double scale = std::max(1.0, ref.cwiseAbs().maxCoeff());
+        for (int i = 0; i < 6 * n; ++i) CHECK(dv[static_cast<std::size_t>(i)] == Approx(ref[i]).margin(1e-9 * scale));
+        const std::vector<double> once = dv;
+        tree.project(dv, lambda);
+        for (int i = 0; i < 6 * n; ++i)
+            CHECK(dv[static_cast<std::size_t>(i)] == Approx(once[static_cast<std::size_t>(i)]).margin(1e-9 * scale));
+        tree.jointImpulses(std::span<const double>(f.data(), static_cast<std::size_t>(6 * n)), dv, lambda);
+        for (int r = 0; r < k; ++r)
+            CHECK(lambda[static_cast<std::size_t>(r)] == Approx(ref[6 * n + r]).margin(1e-8 * scale));
+
+        const int a = std::uniform_int_distribution<int>(0, n - 1)(rng);
+        const Vec6 fa = (Vec6() << randomVec(rng, 1), randomVec(rng, 1)).finished();
+        Eigen::VectorXd single = Eigen::VectorXd::Zero(6 * n);
+        single.segment<6>(6 * a) = fa;
+        const Eigen::VectorXd column = denseSolve(fig, single, Eigen::VectorXd::Zero(k));
+        std::vector<double> got(static_cast<std::size_t>(6 * n));
+        tree.solveImpulse(a, fa, -1, Vec6::Zero(), got);
+        for (int i = 0; i < 6 * n; ++i)
+            CHECK(got[static_cast<std::size_t>(i)] ==
+                  Approx(column[i]).margin(1e-9 * std::max(1.0, column.cwiseAbs().maxCoeff())));
+    }
+}
+
+TEST_CASE("articulated tree: a soft row about a hinge is an implicit damper on its turn", "[bullet][direct]") {
+    // A rod of 2 kg, 1 m, hinged about z at its end, with a soft row about z asking a turn rate e: from rest,
+    // ω (I_end) = λ and ω + γλ = e give ω = e / (1 + γ I_end), the closed form of an implicit damper.
+    const double m = 2.0, len = 1.0, gamma = 0.5, rate = 3.0;
+    const double iEnd = m * len * len / 3;
+    Figure fig;
+    fig.bodies.push_back({m, Eigen::Vector3d(1e-3, m * len * len / 12, m * len * len / 12).asDiagonal()});
+    fig.centre.push_back(Vec3(len / 2, 0, 0));
+    const Vec3 rc(-len / 2, 0, 0);
+    for (int i = 0; i < 3; ++i) {
+        Vec6 j;
+        j << Vec3::Unit(i), rc.cross(Vec3::Unit(i));
+        fig.rows.push_back({0, -1, j, Vec6::Zero()});
+    }
+    for (int i = 0; i < 3; ++i) {
+        Vec6 j;
+        j << Vec3::Zero(), Vec3::Unit(i);
+        fig.rows.push_back({-1, 0, Vec6::Zero(), j, i == 2 ? gamma : 0.0});
+    }
+    ArticulatedTree tree = factored(fig);
+    std::vector<double> e{0, 0, 0, 0, 0, rate}, lambda(6, 0.0), dv(6, 0.0);
+    tree.setTargets(e);
+    tree.project(dv, lambda);
+    const double omega = rate / (1 + gamma * iEnd);
+    CHECK(dv[5] == Approx(omega));
+    CHECK(dv[1] == Approx(omega * len / 2));
+    CHECK(lambda[5] == Approx(iEnd * omega));
 }
