@@ -310,7 +310,7 @@ bool ArticulatedTree::factor() {
 }
 
 // Leaves to root: the joint's free part of its child's bias impulse (y = D⁻¹ Sᵀ p), the rest passed to the parent.
-template <int F>
+template <int F, bool Soft>
 [[gnu::always_inline]] inline void ArticulatedTree::upJoint(const Joint& j, const Vec6* passedOffset,
                                                             const Eigen::Vector3d* yOffset) const {
     const auto c = static_cast<std::size_t>(j.child);
@@ -323,8 +323,9 @@ template <int F>
     double yi[F] = {};
     for (int q = 0; q < 6; ++q)
         for (int i = 0; i < F; ++i) yi[i] += kn.kp[q][i] * p[q];
-    if (yOffset && j.softCount > 0)
-        for (int i = 0; i < F; ++i) yi[i] += yOffset[c][i];
+    if constexpr (Soft)
+        if (j.softCount > 0)
+            for (int i = 0; i < F; ++i) yi[i] += yOffset[c][i];
     for (int i = 0; i < F; ++i) y[i] = yi[i];
     double acc[6];
     for (int q = 0; q < 6; ++q) acc[q] = p[q];
@@ -394,13 +395,14 @@ void ArticulatedTree::impulses(const Joint& j, const Vec6& g, std::span<double> 
     lambda[static_cast<std::size_t>(j.rows[4])] = m[1];
 }
 
+template <bool Soft>
 void ArticulatedTree::up(const Joint& j, const std::vector<Vec6>* passedOffsets,
                          const std::vector<Eigen::Vector3d>* yOffsets) const {
     const Vec6* po = passedOffsets ? passedOffsets->data() : nullptr;
-    const Vec3* yo = yOffsets ? yOffsets->data() : nullptr;
-    if (j.free == 1) upJoint<1>(j, po, yo);
-    else if (j.free == 2) upJoint<2>(j, po, yo);
-    else upJoint<3>(j, po, yo);
+    const Vec3* yo = Soft ? yOffsets->data() : nullptr;
+    if (j.free == 1) upJoint<1, Soft>(j, po, yo);
+    else if (j.free == 2) upJoint<2, Soft>(j, po, yo);
+    else upJoint<3, Soft>(j, po, yo);
 }
 
 // Root first: each body's motion from its parent's (with the joints' `offsets` when there are targets).
@@ -485,12 +487,16 @@ void ArticulatedTree::project(std::span<double> dv, std::span<double> lambda) co
         m_p[i].head<3>() = m_mass[i] * v.head<3>();
         m_p[i].tail<3>().noalias() = m_inertia[i] * v.tail<3>();
     }
-    const bool soft = m_softRows > 0;
-    if (soft) softOffsets(lambda);
-    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it)
-        up(*it, m_hasTargets ? &m_targetPassed : nullptr, soft ? &m_softY : nullptr);
+    const std::vector<Vec6>* passed = m_hasTargets ? &m_targetPassed : nullptr;
+    if (m_softRows == 0) {
+        for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up(*it, passed);
+        down(dv, m_hasTargets ? &m_target : nullptr);
+        return;
+    }
+    softOffsets(lambda);
+    for (auto it = m_joints.rbegin(); it != m_joints.rend(); ++it) up<true>(*it, passed, &m_softY);
     down(dv, m_hasTargets ? &m_target : nullptr);
-    if (soft) softImpulses(dv, lambda);
+    softImpulses(dv, lambda);
 }
 
 void ArticulatedTree::solveImpulse(int a, const Vec6& fa, int b, const Vec6& fb, std::span<double> dv) const {

@@ -96,12 +96,13 @@ class ArticulatedTree {
     };
     template <int F>
     bool factorJoint(Joint& j);
-    template <int F>
+    template <int F, bool Soft>
     void upJoint(const Joint& j, const Vec6* passedOffset, const Eigen::Vector3d* yOffset) const;
     template <int F>
     void downJoint(const Joint& j, const double* w, double* out) const;
     // `offsets`: per body, the particular motion of its joint and (`passedOffsets`) the impulse that passes on;
     // `yOffsets`: per body, its soft rows' part of the free motions; null: no targets.
+    template <bool Soft = false>
     void up(const Joint& j, const std::vector<Vec6>* passedOffsets,
             const std::vector<Eigen::Vector3d>* yOffsets = nullptr) const;
     // Per joint with soft rows, before a projection: their part of the free motions, D⁻¹ Sᵀ Σ u (e − cfm·λ)/cfm
