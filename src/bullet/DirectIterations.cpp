@@ -11,6 +11,17 @@ namespace afb::bullet {
 using direct::addScaled;
 using direct::Vec;
 
+namespace {
+
+// Whether every entry is finite: 0·x is NaN exactly when x is not, and NaN stays NaN through a sum.
+bool allFinite(const std::vector<double>& v) {
+    double zero = 0;
+    for (const double x : v) zero += 0 * x;
+    return zero == 0;
+}
+
+} // namespace
+
 double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
                                           const btAlignedObjectArray<btSolverConstraint>& pool) {
     double residual = 0;
@@ -33,7 +44,7 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
             softKept.clear();
             for (const int i : group.softRows) softKept.push_back(group.lambda(i));
             group.articulated.project(solveX, std::span<double>(group.lambda.data(), group.rows.size()));
-            if (!std::all_of(solveX.begin(), solveX.end(), [](double v) { return std::isfinite(v); })) {
+            if (!allFinite(solveX)) {
                 for (std::size_t m = 0; m < softKept.size(); ++m) group.lambda(group.softRows[m]) = softKept[m];
                 continue;
             }
@@ -61,7 +72,7 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
             for (Eigen::Index i = 0; i < n; ++i)
                 scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])] = -err(i);
             group.tree.solve(scratch.data());
-            if (!std::all_of(scratch.begin(), scratch.end(), [](double v) { return std::isfinite(v); })) continue;
+            if (!allFinite(scratch)) continue;
             for (Eigen::Index i = 0; i < n; ++i)
                 group.lambda(i) += scratch[static_cast<std::size_t>(group.rowAt[static_cast<std::size_t>(i)])];
             for (std::size_t xb = 0; xb < group.bodies.size(); ++xb) {
@@ -149,20 +160,12 @@ double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& 
         return groupOf[static_cast<std::size_t>(c.m_solverBodyIdA)] < 0 &&
                groupOf[static_cast<std::size_t>(c.m_solverBodyIdB)] < 0;
     };
-    auto inTurn = [which, &outsideGroups](const FreeRow& fr) {
-        switch (which) {
-        case InTurn::All: return true;
-        case InTurn::OutsideBlock: return fr.group[0] < 0 && fr.group[1] < 0;
-        case InTurn::OutsideGroups: return outsideGroups(*fr.c);
-        }
-        return true;
-    };
     // One row: Bullet's update with the row's effective mass (through the groups it moves) and its response.
     // Returns the row's residual term, dl² / invEffectiveMass² (0: no change).
     auto resolve = [this, &bodyPool](FreeRow& fr) -> double {
         btSolverConstraint& c = *fr.c;
         if (!fr.pending && fr.invEffectiveMass == 0) return 0;
-        const double toGo = direct::velocityToGo(bodyPool, c);
+        const double toGo = toGoOf(fr, bodyPool);
         if (fr.pending) {
             if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
                 return 0;
@@ -178,32 +181,43 @@ double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& 
         apply(fr, bodyPool, dl);
         return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
     };
-    double residual = 0;
-    for (FreeRow& fr : nonContact)
-        if (iteration < fr.c->m_overrideNumSolverIterations && inTurn(fr)) residual = std::max(residual, resolve(fr));
-    if (!contacts) return residual;
-    for (FreeRow& fr : contact)
-        if (inTurn(fr)) residual = std::max(residual, resolve(fr));
-    for (FreeRow& fr : friction) {
-        if (!inTurn(fr)) continue;
-        const btScalar total = contactPool[fr.c->m_frictionIndex].m_appliedImpulse;
-        if (total <= 0) continue;
-        fr.c->m_lowerLimit = -(fr.c->m_friction * total);
-        fr.c->m_upperLimit = fr.c->m_friction * total;
-        residual = std::max(residual, resolve(fr));
+    // The pass over the rows `inTurn` takes (a separate loop per kind of filter, so that taking every row costs
+    // no test per row).
+    auto pass = [&](auto inTurn) {
+        double residual = 0;
+        for (FreeRow& fr : nonContact)
+            if (iteration < fr.c->m_overrideNumSolverIterations && inTurn(fr))
+                residual = std::max(residual, resolve(fr));
+        if (!contacts) return residual;
+        for (FreeRow& fr : contact)
+            if (inTurn(fr)) residual = std::max(residual, resolve(fr));
+        for (FreeRow& fr : friction) {
+            if (!inTurn(fr)) continue;
+            const btScalar total = contactPool[fr.c->m_frictionIndex].m_appliedImpulse;
+            if (total <= 0) continue;
+            fr.c->m_lowerLimit = -(fr.c->m_friction * total);
+            fr.c->m_upperLimit = fr.c->m_friction * total;
+            residual = std::max(residual, resolve(fr));
+        }
+        for (int j = 0; j < rollingPool.size(); ++j) {
+            btSolverConstraint& c = rollingPool[j];
+            if (which == InTurn::OutsideGroups && !outsideGroups(c)) continue;
+            const btScalar total = contactPool[c.m_frictionIndex].m_appliedImpulse;
+            if (total <= 0) continue;
+            const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
+            c.m_lowerLimit = -magnitude;
+            c.m_upperLimit = magnitude;
+            const btScalar r = rolling(bodyPool[c.m_solverBodyIdA], bodyPool[c.m_solverBodyIdB], c);
+            residual = std::max(residual, double(r) * double(r));
+        }
+        return residual;
+    };
+    switch (which) {
+    case InTurn::All: return pass([](const FreeRow&) { return true; });
+    case InTurn::OutsideBlock: return pass([](const FreeRow& fr) { return fr.group[0] < 0 && fr.group[1] < 0; });
+    case InTurn::OutsideGroups: return pass([&outsideGroups](const FreeRow& fr) { return outsideGroups(*fr.c); });
     }
-    for (int j = 0; j < rollingPool.size(); ++j) {
-        btSolverConstraint& c = rollingPool[j];
-        if (which == InTurn::OutsideGroups && !outsideGroups(c)) continue;
-        const btScalar total = contactPool[c.m_frictionIndex].m_appliedImpulse;
-        if (total <= 0) continue;
-        const btScalar magnitude = btMin(c.m_friction * total, c.m_friction);
-        c.m_lowerLimit = -magnitude;
-        c.m_upperLimit = magnitude;
-        const btScalar r = rolling(bodyPool[c.m_solverBodyIdA], bodyPool[c.m_solverBodyIdB], c);
-        residual = std::max(residual, double(r) * double(r));
-    }
-    return residual;
+    return 0;
 }
 
 btScalar RagdollSolver::solveDirectIteration(int iteration, const btContactSolverInfo& infoGlobal) {

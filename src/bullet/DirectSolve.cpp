@@ -399,6 +399,7 @@ void RagdollSolver::Direct::prepareColumns(const btAlignedObjectArray<btSolverBo
             btSolverConstraint& c = *fr.c;
             if (c.m_jacDiagABInv == 0) continue; // invEffectiveMass 0: the row is skipped, as Bullet would
             fr.cfmVel = double(c.m_cfm) / double(c.m_jacDiagABInv);
+            fr.targetVel = double(c.m_rhs) / double(c.m_jacDiagABInv);
             double w = fr.cfmVel;
             fr.plain = 1.0 / double(c.m_jacDiagABInv);
             bool treesOnly = true, throughGroup = false;

@@ -143,6 +143,7 @@ struct RagdollSolver::Direct {
         int reaction[2] = {-1, -1};  // offsets in `reactions` (one per group joint row)
         double invEffectiveMass = 0; // 1 / (Jᵣ u + cfm′), 0: skip
         double cfmVel = 0;           // the row's cfm in velocity units
+        double targetVel = 0;        // rhs / jacDiagABInv: the velocity the row asks for while its cfm is 0
         double plain = 0;            // J M⁻¹ Jᵀ of the touching bodies alone (the row's scale)
         btScalar start = 0;          // the row's impulse before the iterations (warm start)
         bool pending = false;        // its responses through the groups are not computed yet (complete())
@@ -189,6 +190,13 @@ struct RagdollSolver::Direct {
     void join(FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool);
     // The change of row r's velocity per unit impulse of row s (both joined: their sides are kept).
     double couplingOf(const FreeRow& r, const FreeRow& s) const;
+    // The velocity a free row still asks for (direct::velocityToGo, its target taken once per step when it has no
+    // cfm: the same value without a division).
+    static double toGoOf(const FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool) {
+        const btSolverConstraint& c = *fr.c;
+        if (c.m_cfm != 0) return direct::velocityToGo(bodyPool, c);
+        return fr.targetVel - direct::rowVelocity(bodyPool, c);
+    }
     static bool dynamicBody(const btSolverBody& b) {
         return b.m_originalBody != nullptr && b.m_originalBody->getInvMass() > 0;
     }

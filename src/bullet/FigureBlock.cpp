@@ -91,7 +91,7 @@ void RagdollSolver::Direct::gatherBlock(btAlignedObjectArray<btSolverBody>& body
         if (fr.group[0] < 0 && fr.group[1] < 0) return false;
         btSolverConstraint& c = *fr.c;
         if (!fr.pending && fr.invEffectiveMass == 0) return false;
-        const double toGo = direct::velocityToGo(bodyPool, c);
+        const double toGo = toGoOf(fr, bodyPool);
         if (fr.pending) {
             if (heldAtZeroBound(toGo, double(c.m_appliedImpulse), double(c.m_lowerLimit), double(c.m_upperLimit)))
                 return false;
