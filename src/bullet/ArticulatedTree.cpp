@@ -94,8 +94,9 @@ bool ArticulatedTree::build(std::span<const Body> bodies, std::span<const Row> r
     bool same = m_valid && m_key.size() == 1 + 2 * rows.size() && m_key[0] == n;
     for (std::size_t k = 0; k < rows.size(); ++k) {
         const Row& r = rows[k];
-        if (r.a < -1 || r.b < -1 || r.a >= n || r.b >= n || r.a == r.b || !r.ja.allFinite() || !r.jb.allFinite() ||
-            !(r.cfm >= 0) || !std::isfinite(r.cfm))
+        // 0·x is NaN exactly when x is not finite: one test for all thirteen numbers.
+        if (r.a < -1 || r.b < -1 || r.a >= n || r.b >= n || r.a == r.b || !(r.cfm >= 0) ||
+            !std::isfinite(0 * (r.ja.sum() + r.jb.sum() + r.cfm)))
             return m_valid = false;
         if (r.cfm > 0) ++m_softRows;
         same = same && m_key[1 + 2 * k] == r.a && m_key[2 + 2 * k] == r.b;

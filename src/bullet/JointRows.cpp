@@ -10,6 +10,7 @@
 // them, are Bullet's to the bit. With SIMD rows off (setSimdRows: plain Bullet's reference, `raw`), Bullet's own
 // setup runs instead, so that the reference costs what Bullet costs.
 #include <cstring>
+#include <typeinfo>
 
 #include "afb/bullet/RagdollSolver.h"
 
@@ -32,7 +33,9 @@ void RagdollSolver::convertJoints(btTypedConstraint** constraints, int numConstr
         return;
     }
     for (int j = 0; j < numConstraints; ++j) {
-        constraints[j]->buildJacobian();
+        // A point-to-point constraint's buildJacobian fills Jacobian entries that only Bullet's retired solve read
+        // (getInfo2 works from the pivots): skipped for that exact class, called for every other.
+        if (typeid(*constraints[j]) != typeid(btPoint2PointConstraint)) constraints[j]->buildJacobian();
         constraints[j]->internalSetAppliedImpulse(0);
     }
     int totalRows = 0;
