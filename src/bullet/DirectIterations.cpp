@@ -33,7 +33,7 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
             const std::size_t nb = group.bodies.size();
             solveX.resize(6 * nb);
             for (std::size_t xb = 0; xb < nb; ++xb) {
-                const btSolverBody& b = bodyPool[group.bodies[xb]];
+                const btSolverBody& b = *group.bodyOf[xb];
                 double* dv = solveX.data() + 6 * xb;
                 for (int q = 0; q < 3; ++q) {
                     dv[q] = double(b.m_deltaLinearVelocity[q]);
@@ -49,7 +49,7 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
                 continue;
             }
             for (std::size_t xb = 0; xb < nb; ++xb) {
-                btSolverBody& b = bodyPool[group.bodies[xb]];
+                btSolverBody& b = *group.bodyOf[xb];
                 const double* dv = solveX.data() + 6 * xb;
                 b.m_deltaLinearVelocity = btVector3(btScalar(dv[0]), btScalar(dv[1]), btScalar(dv[2]));
                 b.m_deltaAngularVelocity = btVector3(btScalar(dv[3]), btScalar(dv[4]), btScalar(dv[5]));
@@ -105,14 +105,12 @@ double RagdollSolver::Direct::solveJoints(btAlignedObjectArray<btSolverBody>& bo
     return residual;
 }
 
-void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl) {
+void RagdollSolver::Direct::apply(FreeRow& fr, double dl) {
     btSolverConstraint& c = *fr.c;
-    btSolverBody* const bodies = &bodyPool[0];
     for (int s = 0; s < 2; ++s) {
-        const int id = s ? c.m_solverBodyIdB : c.m_solverBodyIdA;
         const int g = fr.group[s];
         if (g < 0) {
-            btSolverBody& b = bodyPool[id];
+            btSolverBody& b = *fr.at[s];
             if (s == 0)
                 detail::applyRowImpulse<detail::RowTarget::Velocity>(b, c.m_contactNormal1, c.m_angularComponentA,
                                                                      btScalar(dl));
@@ -125,11 +123,10 @@ void RagdollSolver::Direct::apply(FreeRow& fr, btAlignedObjectArray<btSolverBody
         Group& group = groups[static_cast<std::size_t>(g)];
         const btVector3* u = responses.data() + fr.response[s];
         const btScalar impulse = btScalar(dl);
-        const int* ids = group.bodies.data();
-        for (std::size_t x = 0, n = group.bodies.size(); x < n; ++x) {
-            btSolverBody& b = bodies[ids[x]];
-            addScaled(b.m_deltaLinearVelocity, u[2 * x], impulse);
-            addScaled(b.m_deltaAngularVelocity, u[2 * x + 1], impulse);
+        for (btSolverBody* b : group.bodyOf) {
+            addScaled(b->m_deltaLinearVelocity, u[0], impulse);
+            addScaled(b->m_deltaAngularVelocity, u[1], impulse);
+            u += 2;
         }
         if (group.soft && fr.reaction[s] >= 0) {
             const double* y = reactions.data() + fr.reaction[s];
@@ -178,7 +175,7 @@ double RagdollSolver::Direct::resolveInTurn(btAlignedObjectArray<btSolverBody>& 
         else if (sum > double(c.m_upperLimit)) dl = double(c.m_upperLimit) - double(c.m_appliedImpulse);
         if (dl == 0) return 0;
         c.m_appliedImpulse = c.m_appliedImpulse + static_cast<btScalar>(dl);
-        apply(fr, bodyPool, dl);
+        apply(fr, dl);
         return dl * dl / (fr.invEffectiveMass * fr.invEffectiveMass);
     };
     // The pass over the rows `inTurn` takes (a separate loop per kind of filter, so that taking every row costs
@@ -304,10 +301,10 @@ void RagdollSolver::solveDirectSplitImpulse(const btContactSolverInfo& infoGloba
                 const Direct::Group& group = d.groups[static_cast<std::size_t>(g)];
                 const btVector3* u = d.responses.data() + fr.response[s];
                 const btScalar impulse = btScalar(dl);
-                for (std::size_t x = 0; x < group.bodies.size(); ++x) {
-                    btSolverBody& body = m_tmpSolverBodyPool[group.bodies[x]];
-                    addScaled(body.m_pushVelocity, u[2 * x], impulse);
-                    addScaled(body.m_turnVelocity, u[2 * x + 1], impulse);
+                for (btSolverBody* body : group.bodyOf) {
+                    addScaled(body->m_pushVelocity, u[0], impulse);
+                    addScaled(body->m_turnVelocity, u[1], impulse);
+                    u += 2;
                 }
             }
         }

@@ -172,6 +172,16 @@ bool RagdollSolver::buildDirect() {
     d.prepareColumns(m_tmpSolverBodyPool);
     d.denseColumns(m_tmpSolverBodyPool);
     d.block.clear(d.used);
+    // The pool stays where it is until the step ends: the iterations reach the bodies through pointers.
+    for (Direct::Group& group : d.live()) {
+        group.bodyOf.clear();
+        for (const int id : group.bodies) group.bodyOf.push_back(&m_tmpSolverBodyPool[id]);
+    }
+    for (auto* list : {&d.nonContact, &d.contact, &d.friction})
+        for (Direct::FreeRow& fr : *list) {
+            fr.at[0] = &m_tmpSolverBodyPool[fr.c->m_solverBodyIdA];
+            fr.at[1] = &m_tmpSolverBodyPool[fr.c->m_solverBodyIdB];
+        }
     return true;
 }
 

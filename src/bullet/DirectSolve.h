@@ -91,7 +91,8 @@ struct RagdollSolver::Direct {
         SideJ a{}, b{};
     };
     struct Group {
-        std::vector<int> bodies; // solver body ids
+        std::vector<int> bodies;           // solver body ids
+        std::vector<btSolverBody*> bodyOf; // the same bodies in the pool (the iterations' applies walk them)
         std::vector<JointRow> rows;
         std::vector<std::vector<std::pair<int, int>>> rowsAt; // per local body: (joint row, side 0 = A / 1 = B)
         Eigen::LDLT<Mat> ldlt; // the dense factor, when the tree's cannot be used (a loop, two world joints)
@@ -150,6 +151,7 @@ struct RagdollSolver::Direct {
         int blockIndex = -1;         // its index among the figure block's rows (−1: not in it yet)
         int normal = -1;             // a friction row in the block: its contact's block index (−1: none)
         SideJ side[2]{};             // its Jacobian at body A and B, kept when it joins the block (couplingOf)
+        btSolverBody* at[2] = {nullptr, nullptr}; // its bodies in the pool (buildDirect)
     };
 
     // buildDirect's parts, in order: the joint rows' groups (false: none), each group's factor, the other rows,
@@ -172,7 +174,7 @@ struct RagdollSolver::Direct {
     // block, `figureSweeps` sweeps over their couplings (FigureBlock.cpp); each returns its largest residual.
     double solveJoints(btAlignedObjectArray<btSolverBody>& bodyPool,
                        const btAlignedObjectArray<btSolverConstraint>& pool);
-    void apply(FreeRow& fr, btAlignedObjectArray<btSolverBody>& bodyPool, double dl);
+    void apply(FreeRow& fr, double dl);
     double solveFigureBlock(btAlignedObjectArray<btSolverBody>& bodyPool, int iteration, bool contacts);
     // Whether some free row joins two bodies of no group (InTurn::OutsideGroups would take it).
     bool anyOutsideGroups() const;
@@ -195,7 +197,7 @@ struct RagdollSolver::Direct {
     static double toGoOf(const FreeRow& fr, const btAlignedObjectArray<btSolverBody>& bodyPool) {
         const btSolverConstraint& c = *fr.c;
         if (c.m_cfm != 0) return direct::velocityToGo(bodyPool, c);
-        return fr.targetVel - direct::rowVelocity(bodyPool, c);
+        return fr.targetVel - double(detail::rowVelocitySum<detail::RowTarget::Velocity>(*fr.at[0], *fr.at[1], c));
     }
     static bool dynamicBody(const btSolverBody& b) {
         return b.m_originalBody != nullptr && b.m_originalBody->getInvMass() > 0;

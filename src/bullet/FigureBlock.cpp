@@ -168,7 +168,7 @@ double RagdollSolver::Direct::solveFigureBlock(btAlignedObjectArray<btSolverBody
         if (added[r] == 0) continue;
         FreeRow& fr = *block.rows[static_cast<std::size_t>(r)];
         fr.c->m_appliedImpulse = fr.c->m_appliedImpulse + static_cast<btScalar>(added[r]);
-        apply(fr, bodyPool, added[r]);
+        apply(fr, added[r]);
     }
     return residual;
 }
