@@ -193,12 +193,16 @@ bool RagdollSolver::Direct::groupJointRows(const btAlignedObjectArray<btSolverBo
     groupOf.assign(static_cast<std::size_t>(bodyCount), -1);
     localOf.assign(static_cast<std::size_t>(bodyCount), -1);
     bilateral.assign(static_cast<std::size_t>(pool.size()), 0);
+    // Per body, once: 0 not dynamic, 1 dynamic with unit factors, 2 dynamic with others (no group).
     const btVector3 one(1, 1, 1);
-    auto dynamic = [&](int id) { return dynamicBody(bodyPool[id]); };
-    auto unit = [&](int id) {
-        const btSolverBody& b = bodyPool[id];
-        return b.m_linearFactor == one && b.m_angularFactor == one;
-    };
+    bodyKind.resize(static_cast<std::size_t>(bodyCount));
+    for (int i = 0; i < bodyCount; ++i) {
+        const btSolverBody& b = bodyPool[i];
+        bodyKind[static_cast<std::size_t>(i)] =
+            !dynamicBody(b) ? 0 : (b.m_linearFactor == one && b.m_angularFactor == one ? 1 : 2);
+    }
+    auto dynamic = [&](int id) { return bodyKind[static_cast<std::size_t>(id)] != 0; };
+    auto unit = [&](int id) { return bodyKind[static_cast<std::size_t>(id)] == 1; };
     // Union–find over the bodies the unbounded rows of tracked constraints join.
     std::vector<int>& parent = unionParent;
     parent.resize(static_cast<std::size_t>(bodyCount));
@@ -231,7 +235,7 @@ bool RagdollSolver::Direct::groupJointRows(const btAlignedObjectArray<btSolverBo
 bool RagdollSolver::Direct::groupRows(const btAlignedObjectArray<btSolverBody>& bodyPool,
                                       const btAlignedObjectArray<btSolverConstraint>& pool) {
     const int bodyCount = bodyPool.size();
-    auto dynamic = [&](int id) { return dynamicBody(bodyPool[id]); };
+    auto dynamic = [&](int id) { return bodyKind[static_cast<std::size_t>(id)] != 0; }; // groupJointRows'
     auto root = [this](int i) { return unionRoot(i); };
     groupOfRoot.assign(static_cast<std::size_t>(bodyCount), -1);
     auto groupFor = [&](int id) {

@@ -280,6 +280,7 @@ struct RagdollSolver::Direct {
     std::size_t used = 0;
     std::span<Group> live() { return {groups.data(), used}; }
     std::vector<int> groupOf, localOf; // per solver body
+    std::vector<char> bodyKind;        // per solver body: groupJointRows' (not dynamic, unit factors, others)
     std::vector<FreeRow> nonContact, contact, friction;
     std::vector<btVector3> responses; // M⁻¹-weighted velocity change per unit impulse, per group body
     std::vector<double> reactions;
