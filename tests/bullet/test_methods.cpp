@@ -423,9 +423,12 @@ TEST_CASE("joint space: the direct solve in joint space and as a tree of bodies 
           "[bullet][methods]") {
     // Method::jointSpace changes how the direct joint solve factors its system, not the system: a humanoid thrown
     // tumbling through the air (its joints and limits the only rows) follows the same path either way, to rounding,
-    // and its joints stay closed.
+    // and its joints stay closed. Powered (6 Hz motors holding the load pose: soft rows about every joint, a spring
+    // and damper on its free motions in joint space) the same holds.
     static const auto loaded = afb::test::loadEntity("humanoid");
     const auto asset = RagdollAsset::create(loaded.figure);
+    const bool powered = GENERATE(false, true);
+    INFO((powered ? "powered" : "limp"));
     auto path = [&](bool jointSpace) {
         Method m = *afb::bullet::methodPreset("default");
         m.jointSpace = jointSpace;
@@ -437,6 +440,7 @@ TEST_CASE("joint space: the direct solve in joint space and as a tree of bodies 
         o.comeToRest = false;
         o.entityTransform = btTransform(btQuaternion::getIdentity(), btVector3(0, 0, 30));
         Ragdoll& r = scene.spawn(asset, o);
+        if (powered) REQUIRE(r.setMotorGains(afb::bullet::MotorGains{6}));
         for (int i = 0; i < r.bodyCount(); ++i) {
             r.body(i).setAngularVelocity(btVector3(3, -2, 5));
             r.body(i).setLinearVelocity(btVector3(1, 0, 4));
