@@ -290,6 +290,7 @@ void takeBackVelocity(const Side& s, btScalar dt) {
 // thread) may step concurrently.
 struct Scratch {
     std::vector<Side> bodies;
+    std::vector<const btCollisionObject*> objects; // per side, its Bullet body (keyframed ones too)
     std::vector<ContactSides> contacts;
     std::vector<PlaneContact> planes;
     std::vector<Stick> sticks;
@@ -310,7 +311,12 @@ class Pass {
         // One side per Bullet rigid body (figure bodies merged by Method::mergeFixed share one).
         m_bodies.clear();
         m_bodies.reserve(static_cast<std::size_t>(r.rigidBodyCount()));
-        for (int i = 0; i < r.rigidBodyCount(); ++i) m_bodies.push_back(sideOf(&r.rigidBody(i)));
+        scratch.objects.clear();
+        for (int i = 0; i < r.rigidBodyCount(); ++i) {
+            btRigidBody& body = r.rigidBody(i);
+            m_bodies.push_back(sideOf(&body));
+            scratch.objects.push_back(&body);
+        }
     }
     void gather(std::span<btPersistentManifold* const> manifolds);
     bool buildTree();
@@ -334,9 +340,9 @@ class Pass {
 
 // The contacts' sides: this ragdoll's bodies by index, everything else immovable.
 Side* Pass::sideFor(const btCollisionObject* o) {
-    for (std::size_t i = 0; i < m_bodies.size(); ++i)
-        if (static_cast<const btCollisionObject*>(&m_r.rigidBody(static_cast<int>(i))) == o)
-            return m_bodies[i].body ? &m_bodies[i] : nullptr; // a keyframed body: immovable, as static geometry
+    const std::vector<const btCollisionObject*>& objects = m_s.objects;
+    for (std::size_t i = 0; i < objects.size(); ++i)
+        if (objects[i] == o) return m_bodies[i].body ? &m_bodies[i] : nullptr; // keyframed: immovable, as static
     return nullptr;
 }
 

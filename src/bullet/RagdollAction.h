@@ -121,8 +121,8 @@ class Ragdoll::Action : public btActionInterface {
                     continue;
                 if (held == figure::AnchorHold::Line) gap = m_owner.jointError(c).anchorM;
                 else {
-                    const auto [frame1, frame2] = m_owner.constraintFramesWorld(c);
-                    gap = (frame1.getOrigin() - frame2.getOrigin()).length();
+                    const auto [anchor1, anchor2] = m_owner.anchorsWorld(c);
+                    gap = (anchor1 - anchor2).length();
                 }
                 if (gap > guard.maxAnchorErrorM) return trip(GuardTrip::Cause::AnchorError, -1, c, gap);
             }

@@ -95,6 +95,20 @@ std::pair<btTransform, btTransform> Ragdoll::constraintFramesWorld(int i) const 
     return {a, b};
 }
 
+std::pair<btVector3, btVector3> Ragdoll::anchorsWorld(int i) const {
+    if (m_multibody) {
+        const auto [a, b] = m_multibody->constraintFramesWorld(i);
+        return {a.getOrigin(), b.getOrigin()};
+    }
+    // The same arithmetic as the frames' origins: T(origin) is the origin of T · frame.
+    const figure::FigureConstraint& c = figure().constraints[static_cast<std::size_t>(i)];
+    const auto& rigidFrames = m_rigidFrames[static_cast<std::size_t>(i)];
+    const btVector3 a = body(c.body1).getCenterOfMassTransform()(rigidFrames.first.getOrigin());
+    const btVector3 b = c.body2 >= 0 ? body(c.body2).getCenterOfMassTransform()(rigidFrames.second.getOrigin())
+                                     : rigidFrames.second.getOrigin();
+    return {a, b};
+}
+
 void Ragdoll::addConstraints() {
     const figure::Figure& f = figure();
     const JointPolicy policy{{static_cast<btScalar>(m_method.limitErp), m_method.speculativeLimits},

@@ -408,6 +408,8 @@ class Ragdoll {
     const std::optional<GuardTrip>& lastGuardTrip() const;
 
   private:
+    // The origins of constraintFramesWorld(i), without the frames' rotations (the explosion guard's per-step test).
+    std::pair<btVector3, btVector3> anchorsWorld(int i) const;
     class Action;
     void addBodies();
     void relayout(const figure::LodLevel* level); ///< see setLod; null: full detail
