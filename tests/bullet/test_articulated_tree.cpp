@@ -134,6 +134,26 @@ std::vector<double> freeMotion(const Figure& fig, const Eigen::VectorXd& f) {
     return dv;
 }
 
+// A rod of mass m and length len along x, its centre at len/2, hung from the world by a hinge about z at its end
+// (three anchor rows, x and y locked); with softCfm > 0, a soft row about z with that compliance too.
+Figure hingedRod(double m, double len, double softCfm) {
+    Figure fig;
+    fig.bodies.push_back({m, Eigen::Vector3d(1e-3, m * len * len / 12, m * len * len / 12).asDiagonal()});
+    fig.centre.push_back(Vec3(len / 2, 0, 0));
+    const Vec3 rc(-len / 2, 0, 0);
+    for (int i = 0; i < 3; ++i) {
+        Vec6 j;
+        j << Vec3::Unit(i), rc.cross(Vec3::Unit(i));
+        fig.rows.push_back({0, -1, j, Vec6::Zero()});
+    }
+    for (int i = 0; i < (softCfm > 0 ? 3 : 2); ++i) {
+        Vec6 j;
+        j << Vec3::Zero(), Vec3::Unit(i);
+        fig.rows.push_back({-1, 0, Vec6::Zero(), j, i == 2 ? softCfm : 0.0});
+    }
+    return fig;
+}
+
 } // namespace
 
 TEST_CASE("articulated tree: projection and the joints' impulses from momentum give the dense solve's velocities "
@@ -179,21 +199,7 @@ TEST_CASE("articulated tree: a body hung from the world by a hinge turns about t
     // A rod of 2 kg, 1 m long along x, hinged about z at its end: an impulse of 1 N·s along y at its centre
     // turns it about the hinge with ω = J·p / (I_end) where I_end = m·L²/3, and moves its centre at ω·L/2.
     const double m = 2.0, len = 1.0;
-    Figure fig;
-    Eigen::Matrix3d inertia = Eigen::Vector3d(1e-3, m * len * len / 12, m * len * len / 12).asDiagonal();
-    fig.bodies.push_back({m, inertia});
-    fig.centre.push_back(Vec3(len / 2, 0, 0));
-    const Vec3 rc(-len / 2, 0, 0);
-    for (int i = 0; i < 3; ++i) {
-        Vec6 j;
-        j << Vec3::Unit(i), rc.cross(Vec3::Unit(i));
-        fig.rows.push_back({0, -1, j, Vec6::Zero()});
-    }
-    for (int i = 0; i < 2; ++i) {
-        Vec6 j;
-        j << Vec3::Zero(), Vec3::Unit(i);
-        fig.rows.push_back({-1, 0, Vec6::Zero(), j});
-    }
+    const Figure fig = hingedRod(m, len, 0);
     const ArticulatedTree tree = factored(fig);
     Eigen::VectorXd f(6);
     f << 0, 1, 0, 0, 0, 0;
@@ -326,20 +332,7 @@ TEST_CASE("articulated tree: a soft row about a hinge is an implicit damper on i
     // ω (I_end) = λ and ω + γλ = e give ω = e / (1 + γ I_end), the closed form of an implicit damper.
     const double m = 2.0, len = 1.0, gamma = 0.5, rate = 3.0;
     const double iEnd = m * len * len / 3;
-    Figure fig;
-    fig.bodies.push_back({m, Eigen::Vector3d(1e-3, m * len * len / 12, m * len * len / 12).asDiagonal()});
-    fig.centre.push_back(Vec3(len / 2, 0, 0));
-    const Vec3 rc(-len / 2, 0, 0);
-    for (int i = 0; i < 3; ++i) {
-        Vec6 j;
-        j << Vec3::Unit(i), rc.cross(Vec3::Unit(i));
-        fig.rows.push_back({0, -1, j, Vec6::Zero()});
-    }
-    for (int i = 0; i < 3; ++i) {
-        Vec6 j;
-        j << Vec3::Zero(), Vec3::Unit(i);
-        fig.rows.push_back({-1, 0, Vec6::Zero(), j, i == 2 ? gamma : 0.0});
-    }
+    const Figure fig = hingedRod(m, len, gamma);
     ArticulatedTree tree = factored(fig);
     std::vector<double> e{0, 0, 0, 0, 0, rate}, lambda(6, 0.0), dv(6, 0.0);
     tree.setTargets(e);
