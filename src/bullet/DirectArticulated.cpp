@@ -38,7 +38,9 @@ bool RagdollSolver::Direct::factorArticulated(Group& group, const btAlignedObjec
             row.jb[3 + q] = double(jr.b.ang[q]);
         }
     }
-    return group.articulated.build(bodies, rows) && group.articulated.factor();
+    if (group.articulated.build(bodies, rows) && group.articulated.factor()) return true;
+    group.softRows.clear(); // the caller factors the rows as a tree of bodies and joints instead
+    return false;
 }
 
 void RagdollSolver::Direct::articulatedColumn(FreeRow& fr, int s, bool withA, bool withB,
