@@ -60,8 +60,6 @@ class ArticulatedTree {
     void jointImpulses(std::span<const double> f, std::span<const double> dv, std::span<double> lambda) const;
 
     int bodies() const { return static_cast<int>(m_mass.size()); }
-    /// Whether a row of build() is soft.
-    bool hasSoftRows() const { return m_softRows > 0; }
 
   private:
     // One joint, stored at its child body, in order from the root (a parent before its children).

@@ -141,7 +141,7 @@ struct RagdollSolver::Direct {
         btSolverConstraint* c = nullptr;
         int group[2] = {-1, -1};     // group of side A, of side B (−1: a plain body)
         int response[2] = {-1, -1};  // offsets in `responses` (linear, angular per group body), per distinct group
-        int reaction[2] = {-1, -1};  // offsets in `reactions` (one per group joint row)
+        int reaction[2] = {-1, -1};  // offsets in `reactions` (one per group joint row; per soft row in joint space)
         double invEffectiveMass = 0; // 1 / (Jᵣ u + cfm′), 0: skip
         double cfmVel = 0;           // the row's cfm in velocity units
         double targetVel = 0;        // rhs / jacDiagABInv: the velocity the row asks for while its cfm is 0
