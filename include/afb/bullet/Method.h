@@ -196,10 +196,10 @@ struct Method {
     /// body-step. Off in every preset (docs/methods.md, docs/performance.md).
     bool frictionThroughFigure = false;
     /// Under the direct joint solve, a ragdoll whose joints are all point joints with locked axes (ball,
-    /// universal, hinge) and stiff is solved in joint space: each joint's free motions are eliminated from the
-    /// leaves to the root (the articulated-body recursion), the same system the tree of bodies and joints solves
-    /// otherwise, for fewer operations. Results agree to rounding. On in every preset; off exists to compare
-    /// the two (docs/methods.md).
+    /// universal, hinge), stiff or driven by unbounded motors, is solved in joint space: each joint's free motions are
+    /// eliminated from the leaves to the root (the articulated-body recursion), the same system the tree of bodies and
+    /// joints solves otherwise, for fewer operations. Results agree to rounding. On in every preset; off exists to
+    /// compare the two (docs/methods.md).
     bool jointSpace = true;
     /// Convex pairs whose bounding boxes overlap but whose shapes are apart along the line between their centres
     /// (by more than the manifold keeps points at) skip Bullet's GJK: the contacts are the same bit for bit, found
